@@ -1,0 +1,147 @@
+#include <cvode/cvode.h>
+#include <nvector/nvector_serial.h>
+#include <sundials/sundials_context.h>
+#include <sunlinsol/sunlinsol_dense.h>
+#include <sunmatrix/sunmatrix_dense.h>
+
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "core/integrator.hpp"
+
+namespace lash {
+
+namespace {
+
+/// Every SUNDIALS call goes through here: a negative flag becomes an exception naming the call.
+void check(int flag, const char* call) {
+  if (flag < 0)
+    throw std::runtime_error(std::string("SUNDIALS ") + call + " failed: " +
+                             CVodeGetReturnFlagName(flag));
+}
+template <class T>
+T* check_ptr(T* p, const char* call) {
+  if (!p) throw std::runtime_error(std::string("SUNDIALS ") + call + " returned null");
+  return p;
+}
+
+class CvodeBdf final : public Integrator {
+ public:
+  CvodeBdf(OdeProblem p, IntegratorOptions o) : p_(std::move(p)), o_(o) {
+    check(SUNContext_Create(nullptr, &ctx_), "SUNContext_Create");
+    y_ = check_ptr(N_VNew_Serial(p_.n, ctx_), "N_VNew_Serial");
+    mem_ = check_ptr(CVodeCreate(CV_BDF, ctx_), "CVodeCreate");
+  }
+  ~CvodeBdf() override {
+    if (mem_) CVodeFree(&mem_);
+    if (ls_) SUNLinSolFree(ls_);
+    if (a_) SUNMatDestroy(a_);
+    if (y_) N_VDestroy(y_);
+    if (ctx_) SUNContext_Free(&ctx_);
+  }
+
+  const char* name() const override { return "bdf"; }
+
+  void reset(double t, const Eigen::VectorXd& y) override {
+    for (int i = 0; i < p_.n; ++i) NV_Ith_S(y_, i) = y[i];
+    if (!initialised_) {
+      check(CVodeInit(mem_, rhs_cb, t, y_), "CVodeInit");
+      check(CVodeSetUserData(mem_, this), "CVodeSetUserData");
+      check(CVodeSStolerances(mem_, o_.rtol, o_.atol), "CVodeSStolerances");
+      check(CVodeSetErrHandlerFn(mem_, err_cb, this), "CVodeSetErrHandlerFn");
+      check(CVodeSetMaxNumSteps(mem_, o_.max_steps), "CVodeSetMaxNumSteps");
+      if (o_.max_step > 0) check(CVodeSetMaxStep(mem_, o_.max_step), "CVodeSetMaxStep");
+      a_ = check_ptr(SUNDenseMatrix(p_.n, p_.n, ctx_), "SUNDenseMatrix");
+      ls_ = check_ptr(SUNLinSol_Dense(y_, a_, ctx_), "SUNLinSol_Dense");
+      check(CVodeSetLinearSolver(mem_, ls_, a_), "CVodeSetLinearSolver");
+      if (p_.n_events > 0) {
+        check(CVodeRootInit(mem_, p_.n_events, root_cb), "CVodeRootInit");
+        std::vector<int> dir(p_.n_events, 1);  // events are g rising through zero
+        check(CVodeSetRootDirection(mem_, dir.data()), "CVodeSetRootDirection");
+      }
+      initialised_ = true;
+    } else {
+      check(CVodeReInit(mem_, t, y_), "CVodeReInit");
+    }
+    t_ = t;
+  }
+
+  Advance advance(double t_out, Eigen::VectorXd& y) override {
+    if (t_out <= t_) {
+      for (int i = 0; i < p_.n; ++i) y[i] = NV_Ith_S(y_, i);
+      return {Advance::reached, t_, {}};
+    }
+    double t_ret = t_;
+    last_error_.clear();
+    const int flag = CVode(mem_, t_out, y_, &t_ret, CV_NORMAL);
+    for (int i = 0; i < p_.n; ++i) y[i] = NV_Ith_S(y_, i);
+    if (flag == CV_ROOT_RETURN) {
+      ++events_;
+      t_ = t_ret;
+      return {Advance::event, t_ret, {}};
+    }
+    if (flag < 0) {
+      double t_cur = t_ret;
+      CVodeGetCurrentTime(mem_, &t_cur);
+      return {Advance::failure, t_cur,
+              std::string(CVodeGetReturnFlagName(flag)) +
+                  (last_error_.empty() ? "" : ": " + last_error_)};
+    }
+    t_ = t_ret;
+    return {Advance::reached, t_ret, {}};
+  }
+
+  IntegratorStats stats() const override {
+    IntegratorStats s;
+    long v = 0;
+    CVodeGetNumSteps(mem_, &v);
+    s.steps = v;
+    CVodeGetNumErrTestFails(mem_, &v);
+    s.rejected_steps = v;
+    long fe = 0, fe_ls = 0;
+    CVodeGetNumRhsEvals(mem_, &fe);
+    CVodeGetNumLinRhsEvals(mem_, &fe_ls);
+    s.rhs_evaluations = fe + fe_ls;
+    double h = 0;
+    CVodeGetLastStep(mem_, &h);
+    s.last_step = h;
+    s.events = events_;
+    return s;
+  }
+
+ private:
+  static int rhs_cb(double t, N_Vector y, N_Vector ydot, void* data) {
+    auto* self = static_cast<CvodeBdf*>(data);
+    const bool ok = self->p_.rhs(t, N_VGetArrayPointer(y), N_VGetArrayPointer(ydot));
+    return ok ? 0 : 1;  // 1: recoverable, CVODE retries with a smaller step
+  }
+  static int root_cb(double t, N_Vector y, double* g, void* data) {
+    auto* self = static_cast<CvodeBdf*>(data);
+    self->p_.events(t, N_VGetArrayPointer(y), g);
+    return 0;
+  }
+  static void err_cb(int, const char*, const char*, char* msg, void* data) {
+    static_cast<CvodeBdf*>(data)->last_error_ = msg;
+  }
+
+  OdeProblem p_;
+  IntegratorOptions o_;
+  SUNContext ctx_ = nullptr;
+  N_Vector y_ = nullptr;
+  void* mem_ = nullptr;
+  SUNMatrix a_ = nullptr;
+  SUNLinearSolver ls_ = nullptr;
+  bool initialised_ = false;
+  double t_ = 0.0;
+  long events_ = 0;
+  std::string last_error_;
+};
+
+}  // namespace
+
+std::unique_ptr<Integrator> make_cvode_bdf(OdeProblem problem, IntegratorOptions options) {
+  return std::make_unique<CvodeBdf>(std::move(problem), options);
+}
+
+}  // namespace lash

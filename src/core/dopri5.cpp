@@ -1,0 +1,254 @@
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "core/integrator.hpp"
+
+namespace lash {
+
+namespace {
+
+// Dormand–Prince 5(4) tableau (Hairer, Nørsett & Wanner, Solving ODEs I, Table II.5.2).
+constexpr double c2 = 1.0 / 5, c3 = 3.0 / 10, c4 = 4.0 / 5, c5 = 8.0 / 9;
+constexpr double a21 = 1.0 / 5;
+constexpr double a31 = 3.0 / 40, a32 = 9.0 / 40;
+constexpr double a41 = 44.0 / 45, a42 = -56.0 / 15, a43 = 32.0 / 9;
+constexpr double a51 = 19372.0 / 6561, a52 = -25360.0 / 2187, a53 = 64448.0 / 6561,
+                 a54 = -212.0 / 729;
+constexpr double a61 = 9017.0 / 3168, a62 = -355.0 / 33, a63 = 46732.0 / 5247,
+                 a64 = 49.0 / 176, a65 = -5103.0 / 18656;
+constexpr double a71 = 35.0 / 384, a73 = 500.0 / 1113, a74 = 125.0 / 192,
+                 a75 = -2187.0 / 6784, a76 = 11.0 / 84;
+// Error estimate: 5th-order minus embedded 4th-order weights.
+constexpr double e1 = 71.0 / 57600, e3 = -71.0 / 16695, e4 = 71.0 / 1920,
+                 e5 = -17253.0 / 339200, e6 = 22.0 / 525, e7 = -1.0 / 40;
+// Dense output (Hairer's contd5).
+constexpr double d1 = -12715105075.0 / 11282082432.0, d3 = 87487479700.0 / 32700410799.0,
+                 d4 = -10690763975.0 / 1880347072.0, d5 = 701980252875.0 / 199316789632.0,
+                 d6 = -1453857185.0 / 822651844.0, d7 = 69997945.0 / 29380423.0;
+
+class Dopri5 final : public Integrator {
+ public:
+  Dopri5(OdeProblem p, IntegratorOptions o) : p_(std::move(p)), o_(o) {
+    const int n = p_.n;
+    for (auto* v : {&y_, &k1_, &k2_, &k3_, &k4_, &k5_, &k6_, &k7_, &yt_, &ynew_, &r1_, &r2_,
+                    &r3_, &r4_, &r5_})
+      v->resize(n);
+    g_old_.resize(p_.n_events);
+    g_new_.resize(p_.n_events);
+    g_tmp_.resize(p_.n_events);
+    ye_.resize(n);
+  }
+
+  const char* name() const override { return "dopri5"; }
+  IntegratorStats stats() const override { return stats_; }
+
+  void reset(double t, const Eigen::VectorXd& y) override {
+    t_ = t;
+    y_ = y;
+    have_step_ = false;
+    pending_event_ = false;
+    need_k1_ = true;
+    if (p_.n_events > 0) p_.events(t_, y_.data(), g_old_.data());
+  }
+
+  Advance advance(double t_out, Eigen::VectorXd& y) override {
+    for (;;) {
+      // Serve the request from the last accepted step where it lies inside.
+      if (have_step_) {
+        if (pending_event_ && t_out >= t_event_) {
+          dense(t_event_, y);
+          ++stats_.events;
+          return {Advance::event, t_event_, {}};
+        }
+        if (t_out <= t_) {
+          dense(t_out, y);
+          return {Advance::reached, t_out, {}};
+        }
+      } else if (t_out <= t_) {
+        y = y_;
+        return {Advance::reached, t_, {}};
+      }
+      if (pending_event_) {  // the caller must reset() at the event first
+        return {Advance::failure, t_, "internal: advance past an unhandled event"};
+      }
+      if (auto fail = step(); !fail.empty()) return {Advance::failure, t_, fail};
+    }
+  }
+
+ private:
+  bool f(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dy) {
+    ++stats_.rhs_evaluations;
+    return p_.rhs(t, y.data(), dy.data()) && dy.allFinite();
+  }
+
+  double error_norm(const Eigen::VectorXd& err, const Eigen::VectorXd& y0,
+                    const Eigen::VectorXd& y1) const {
+    double sum = 0.0;
+    for (int i = 0; i < p_.n; ++i) {
+      const double sc = o_.atol + o_.rtol * std::max(std::abs(y0[i]), std::abs(y1[i]));
+      sum += (err[i] / sc) * (err[i] / sc);
+    }
+    return std::sqrt(sum / p_.n);
+  }
+
+  double initial_step() {
+    // Hairer's starting-step heuristic (Solving ODEs I, §II.4).
+    const double d0 = error_norm(y_ * 0.0 + y_, Eigen::VectorXd::Zero(p_.n), y_);
+    const double d1n = error_norm(k1_, Eigen::VectorXd::Zero(p_.n), y_);
+    double h0 = (d0 < 1e-5 || d1n < 1e-5) ? 1e-6 : 0.01 * d0 / d1n;
+    if (o_.max_step > 0) h0 = std::min(h0, o_.max_step);
+    yt_ = y_ + h0 * k1_;
+    if (!f(t_ + h0, yt_, k2_)) return h0 * 1e-3;
+    const double d2 = error_norm(k2_ - k1_, Eigen::VectorXd::Zero(p_.n), y_) / h0;
+    const double dm = std::max(d1n, d2);
+    const double h1 = dm <= 1e-15 ? std::max(1e-6, h0 * 1e-3) : std::pow(0.01 / dm, 1.0 / 5);
+    double h = std::min(100 * h0, h1);
+    if (o_.max_step > 0) h = std::min(h, o_.max_step);
+    return h;
+  }
+
+  /// One accepted step (with retries). Returns "" or a failure message.
+  std::string step() {
+    if (need_k1_) {
+      if (!f(t_, y_, k1_))
+        return "the right-hand side is not finite or the constraints are singular";
+      need_k1_ = false;
+      if (h_ <= 0.0) h_ = initial_step();
+    }
+    bool rejected_last = false;
+    for (;;) {
+      if (stats_.steps >= o_.max_steps)
+        return "maximum number of steps (" + std::to_string(o_.max_steps) + ") reached";
+      double h = h_;
+      if (o_.max_step > 0) h = std::min(h, o_.max_step);
+      if (h < 16.0 * std::numeric_limits<double>::epsilon() * std::max(1.0, std::abs(t_)))
+        return "step size underflow (h = " + std::to_string(h) + " s)";
+      bool ok = true;
+      yt_ = y_ + h * a21 * k1_;
+      ok = ok && f(t_ + c2 * h, yt_, k2_);
+      if (ok) { yt_ = y_ + h * (a31 * k1_ + a32 * k2_); ok = f(t_ + c3 * h, yt_, k3_); }
+      if (ok) { yt_ = y_ + h * (a41 * k1_ + a42 * k2_ + a43 * k3_); ok = f(t_ + c4 * h, yt_, k4_); }
+      if (ok) {
+        yt_ = y_ + h * (a51 * k1_ + a52 * k2_ + a53 * k3_ + a54 * k4_);
+        ok = f(t_ + c5 * h, yt_, k5_);
+      }
+      if (ok) {
+        yt_ = y_ + h * (a61 * k1_ + a62 * k2_ + a63 * k3_ + a64 * k4_ + a65 * k5_);
+        ok = f(t_ + h, yt_, k6_);
+      }
+      if (ok) {
+        ynew_ = y_ + h * (a71 * k1_ + a73 * k3_ + a74 * k4_ + a75 * k5_ + a76 * k6_);
+        ok = f(t_ + h, ynew_, k7_);
+      }
+      if (!ok) {  // a stage left the domain: shrink hard and retry
+        ++stats_.rejected_steps;
+        h_ = 0.25 * h;
+        rejected_last = true;
+        continue;
+      }
+      yt_ = h * (e1 * k1_ + e3 * k3_ + e4 * k4_ + e5 * k5_ + e6 * k6_ + e7 * k7_);
+      const double err = error_norm(yt_, y_, ynew_);
+      double fac = err > 0 ? 0.9 * std::pow(err, -0.2) : 5.0;
+      if (err > 1.0 || !std::isfinite(err)) {
+        ++stats_.rejected_steps;
+        h_ = h * std::clamp(std::isfinite(err) ? fac : 0.2, 0.2, 1.0);
+        rejected_last = true;
+        continue;
+      }
+      // Accepted: dense-output coefficients over [t, t + h].
+      r1_ = y_;
+      r2_ = ynew_ - y_;
+      r3_ = h * k1_ - r2_;
+      r4_ = r2_ - h * k7_ - r3_;
+      r5_ = h * (d1 * k1_ + d3 * k3_ + d4 * k4_ + d5 * k5_ + d6 * k6_ + d7 * k7_);
+      t_old_ = t_;
+      h_step_ = h;
+      t_ = t_ + h;
+      y_ = ynew_;
+      k1_ = k7_;
+      have_step_ = true;
+      ++stats_.steps;
+      stats_.last_step = h;
+      h_ = h * std::clamp(fac, 0.2, rejected_last ? 1.0 : 10.0);
+      locate_events();
+      return "";
+    }
+  }
+
+  void dense(double t, Eigen::VectorXd& y) const {
+    const double th = (t - t_old_) / h_step_, th1 = 1.0 - th;
+    y = r1_ + th * (r2_ + th1 * (r3_ + th * (r4_ + th1 * r5_)));
+  }
+
+  double g_at(int k, double t) {
+    dense(t, ye_);
+    p_.events(t, ye_.data(), g_tmp_.data());
+    return g_tmp_[k];
+  }
+
+  /// Finds the first event in the accepted step [t_old_, t_]: g_k rising through zero, checked
+  /// at four points of the dense output, then bracketed by the Illinois method.
+  void locate_events() {
+    if (p_.n_events == 0) return;
+    p_.events(t_, y_.data(), g_new_.data());
+    double best = std::numeric_limits<double>::infinity();
+    for (int k = 0; k < p_.n_events; ++k) {
+      double ta = t_old_, ga = g_old_[k];
+      for (int s = 1; s <= 4; ++s) {
+        const double tb = s == 4 ? t_ : t_old_ + 0.25 * s * h_step_;
+        const double gb = s == 4 ? g_new_[k] : g_at(k, tb);
+        if (ga <= 0.0 && gb > 0.0) {
+          best = std::min(best, bracket(k, ta, ga, tb, gb));
+          break;
+        }
+        ta = tb;
+        ga = gb;
+      }
+    }
+    g_old_ = g_new_;
+    if (std::isfinite(best)) {
+      pending_event_ = true;
+      t_event_ = best;
+    }
+  }
+
+  double bracket(int k, double a, double ga, double b, double gb) {
+    const double tol = std::max(1e-9 * h_step_, 4 * std::numeric_limits<double>::epsilon() *
+                                                    std::abs(b));
+    int side = 0;
+    for (int it = 0; it < 200 && b - a > tol; ++it) {
+      double c = b - gb * (b - a) / (gb - ga);
+      if (!(c > a && c < b)) c = 0.5 * (a + b);
+      const double gc = g_at(k, c);
+      if (gc > 0.0) {
+        b = c;
+        gb = gc;
+        if (side == 1) ga *= 0.5;
+        side = 1;
+      } else {
+        a = c;
+        ga = gc;
+        if (side == -1) gb *= 0.5;
+        side = -1;
+      }
+    }
+    return b;  // just past the crossing: g_k > 0 here
+  }
+
+  OdeProblem p_;
+  IntegratorOptions o_;
+  IntegratorStats stats_;
+  double t_ = 0.0, t_old_ = 0.0, h_ = 0.0, h_step_ = 0.0, t_event_ = 0.0;
+  bool have_step_ = false, need_k1_ = true, pending_event_ = false;
+  Eigen::VectorXd y_, k1_, k2_, k3_, k4_, k5_, k6_, k7_, yt_, ynew_, r1_, r2_, r3_, r4_, r5_, ye_;
+  Eigen::VectorXd g_old_, g_new_, g_tmp_;
+};
+
+}  // namespace
+
+std::unique_ptr<Integrator> make_dopri5(OdeProblem problem, IntegratorOptions options) {
+  return std::make_unique<Dopri5>(std::move(problem), options);
+}
+
+}  // namespace lash

@@ -1,0 +1,97 @@
+#pragma once
+/// @file dynamics.hpp
+/// Equations of motion in planar body coordinates (seed 001; Nikravesh):
+///   M q̈ = g(q, q̇, t) + Φ_qᵀ λ,   Φ_q q̈ = γ − 2αΦ̇ − β²Φ  (Baumgarte),
+/// q = [x, y, φ] per body. M is diagonal, so λ comes from the m×m Schur complement
+/// (Φ_q M⁻¹ Φ_qᵀ) λ = γ_B − Φ_q M⁻¹ g, factored by Cholesky. Clearance joints add no
+/// constraint; they add contact forces to g. The ODE state is
+///   y = [q (3nb), q̇ (3nb), E_dissipated, W_input].
+#include <Eigen/Cholesky>
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "core/expression.hpp"
+#include "core/model.hpp"
+
+namespace lash {
+
+/// Everything a clearance joint reports at one instant (shared/reference/formulas.md).
+struct ClearanceOutput {
+  Vec2 e = Vec2::Zero();       ///< eccentricity r_J − r_B, m
+  double e_len = 0.0;          ///< |e|, m
+  double delta = 0.0;          ///< penetration |e| − c, m (< 0 in free flight)
+  double delta_dot = 0.0;      ///< ė·n, m/s
+  double f_n = 0.0;            ///< normal force, N (≥ 0)
+  double f_t = 0.0;            ///< tangential force on the journal along t, N
+  double v_t = 0.0;            ///< relative tangential velocity, m/s
+  double potential = 0.0;      ///< elastic energy, J
+  double dissipation = 0.0;    ///< dissipated power, W (≥ 0)
+};
+
+/// Discrete state of a clearance joint: changed only at located events.
+struct ContactState {
+  bool in_contact = false;
+  double impact_velocity = 0.0;  ///< δ̇⁻ at the located onset, m/s
+};
+
+/// The mutable companion of a Model: discrete state, compiled expressions, preallocated
+/// matrices and the quantities of the last evaluation. One per concurrent run.
+struct Workspace {
+  explicit Workspace(const Model& model);
+
+  int nb = 0;   ///< bodies
+  int nq = 0;   ///< 3 nb
+  int m = 0;    ///< constraint equations
+  int ny = 0;   ///< ODE state size, 2 nq + 2
+  int nc = 0;   ///< clearance joints
+  std::vector<int> row_of_joint;   ///< first constraint row of each joint (−1: clearance joint)
+  std::vector<int> row_of_driver;  ///< constraint row of each driver
+  std::vector<int> clearance_joints;  ///< joint indices of clearance joints
+  std::vector<ContactState> contact;  ///< per clearance joint
+
+  // Expressions (compiled against `vars`).
+  ExpressionVariables vars;
+  std::vector<Expression> driver_expr;              ///< per driver (or empty slot)
+  std::vector<std::vector<Expression>> load_expr;   ///< per load: fx, fy or torque
+  bool loads_use_state = false;
+
+  // Work arrays (sized once).
+  Eigen::VectorXd minv, g, phi, phi_dot, gamma, rhs_m, lambda, qdd;
+  Eigen::MatrixXd phi_q, w;
+  Eigen::LLT<Eigen::MatrixXd> llt;
+
+  // Outputs of the last evaluate().
+  std::vector<ClearanceOutput> clearance_out;
+  double kinetic = 0.0, potential = 0.0, dissipated_power = 0.0, input_power = 0.0;
+  double constraint_violation = 0.0;  ///< max |Φ|, m or rad
+  long rhs_evaluations = 0;
+};
+
+/// Evaluates ẏ = f(t, y); fills the workspace's outputs (λ, contact quantities, energies).
+/// Allocates nothing. Returns false if the constraint matrix is singular or a value is not finite.
+bool evaluate(const Model& model, Workspace& ws, double t, const double* y, double* ydot);
+
+/// Event functions, one per clearance joint: g_k = s_k δ_k with s_k = +1 in free flight and −1 in
+/// contact, so every event is g rising through zero (onset: δ ↑ 0; separation: δ ↓ 0).
+void event_functions(const Model& model, const Workspace& ws, const double* y, double* g);
+
+/// Penetration δ and its rate δ̇ of clearance joint k (index into ws.clearance_joints).
+void clearance_gap(const Model& model, const Workspace& ws, int k, const double* y, double& delta,
+                   double& delta_dot);
+
+/// Constraint residual Φ(q, t) and max |Φ| (drift monitor).
+double constraint_residual(const Model& model, Workspace& ws, double t, const double* y);
+
+/// Builds a consistent initial state y(0) by Newton iteration on the position constraints and a
+/// least-squares solve of the velocity constraints. Rule `ideal`: clearance joints are closed
+/// (journals centred) and all velocities follow from the drivers (shared/reference/mechanisms.md
+/// §1). Rule `given`: the model's poses and velocities are projected onto the actual constraints.
+/// Throws std::runtime_error if the constraints cannot be satisfied.
+Eigen::VectorXd initial_state(const Model& model, Workspace& ws);
+
+/// Driver coordinate target f and its derivatives at t (rad or m).
+void driver_motion(const Model& model, Workspace& ws, int d, double t, double& f, double& fd,
+                   double& fdd);
+
+}  // namespace lash

@@ -1,0 +1,63 @@
+#pragma once
+/// @file integrator.hpp
+/// The integrator interface the simulation loop drives: advance to an output time, stopping
+/// early at a located event (an event function rising through zero).
+#include <Eigen/Core>
+#include <functional>
+#include <memory>
+#include <string>
+
+namespace lash {
+
+/// An ODE ẏ = f(t, y) with event functions g(t, y) (events: g_k rising through 0).
+struct OdeProblem {
+  int n = 0;
+  int n_events = 0;
+  /// Returns false if f cannot be evaluated (NaN, singular constraints).
+  std::function<bool(double t, const double* y, double* ydot)> rhs;
+  std::function<void(double t, const double* y, double* g)> events;
+};
+
+struct IntegratorOptions {
+  double rtol = 1e-6;
+  double atol = 1e-9;
+  double max_step = 0.0;    ///< 0: unlimited
+  long max_steps = 50'000'000;
+};
+
+struct IntegratorStats {
+  long steps = 0;
+  long rejected_steps = 0;
+  long rhs_evaluations = 0;
+  long events = 0;
+  double last_step = 0.0;
+};
+
+/// Outcome of Integrator::advance.
+struct Advance {
+  enum Kind { reached, event, failure } kind = reached;
+  double t = 0.0;           ///< time reached (t_out, the located event, or the failure time)
+  std::string message;      ///< failure reason
+};
+
+class Integrator {
+ public:
+  virtual ~Integrator() = default;
+  /// (Re)starts from (t, y), e.g. after an event changed the right-hand side.
+  virtual void reset(double t, const Eigen::VectorXd& y) = 0;
+  /// Integrates toward t_out; y receives the state at the returned time. An event returns the
+  /// first point found just past the crossing (g_k > 0 there).
+  virtual Advance advance(double t_out, Eigen::VectorXd& y) = 0;
+  virtual IntegratorStats stats() const = 0;
+  virtual const char* name() const = 0;
+};
+
+/// Dormand–Prince 5(4) with error control, 4th-order dense output (Hairer, Nørsett & Wanner,
+/// Solving ODEs I, §II.5–6) and event location on the dense output (Illinois method).
+std::unique_ptr<Integrator> make_dopri5(OdeProblem problem, IntegratorOptions options);
+
+/// SUNDIALS CVODE, variable-order BDF with Newton iterations on a dense finite-difference
+/// Jacobian, and its root finding for events.
+std::unique_ptr<Integrator> make_cvode_bdf(OdeProblem problem, IntegratorOptions options);
+
+}  // namespace lash

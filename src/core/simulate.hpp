@@ -1,0 +1,54 @@
+#pragma once
+/// @file simulate.hpp
+/// The run loop: consistent initial state, integration to each output time of the user's fixed
+/// interval (from dense output, independent of the steps), located contact onsets and
+/// separations, and numerical failures turned into a status.
+#include <Eigen/Core>
+#include <string>
+
+#include "core/dynamics.hpp"
+#include "core/integrator.hpp"
+#include "core/model.hpp"
+
+namespace lash {
+
+/// A located contact onset or separation of one clearance joint.
+struct ContactEvent {
+  double t = 0.0;
+  int clearance = 0;       ///< index into Workspace::clearance_joints
+  bool onset = true;       ///< false: separation
+  double velocity = 0.0;   ///< δ̇ at the located crossing (the impact velocity δ̇⁻ at onset), m/s
+};
+
+/// Receives results as they are produced (so nothing needs to be kept in memory).
+class Observer {
+ public:
+  virtual ~Observer() = default;
+  /// Called at every output time; `ws` holds the quantities evaluated at (t, y).
+  virtual void output(double t, const Eigen::VectorXd& y, const Workspace& ws) = 0;
+  virtual void event(const ContactEvent&, const Workspace&) {}
+  /// Called after each output; `t_end` is the final time.
+  virtual void progress(double /*t*/, double /*t_end*/) {}
+};
+
+struct RunStatus {
+  bool ok = true;
+  double t = 0.0;
+  std::string element;   ///< the element at fault, if one is
+  std::string message;   ///< what happened, with the state that shows it
+};
+
+struct RunResult {
+  RunStatus status;
+  IntegratorStats stats;
+  std::string integrator;
+  double wall_seconds = 0.0;
+  double max_constraint_violation = 0.0;
+  long outputs = 0;
+};
+
+/// Runs the model's solver settings from the initial-state rule to end_time.
+/// Throws std::runtime_error only when no consistent initial state exists.
+RunResult simulate(const Model& model, Workspace& ws, Observer& observer);
+
+}  // namespace lash

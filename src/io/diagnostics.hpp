@@ -1,0 +1,35 @@
+#pragma once
+/// @file diagnostics.hpp
+/// Problems found in a user's model, each pointing into the file:
+///   model.yaml:42:7: joint 'rod_slider': clearance must be >= 0, got -0.001
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace lash {
+
+struct Diagnostic {
+  std::string file;
+  int line = 0;        ///< 1-based; 0 when the value came from a --set override
+  int column = 0;      ///< 1-based
+  std::string element; ///< e.g. "joint 'rod_slider'"; may be empty
+  std::string message;
+  std::string str() const;
+};
+
+/// Thrown by the loader with every problem found in the model.
+class ModelError : public std::runtime_error {
+ public:
+  explicit ModelError(std::vector<Diagnostic> diagnostics);
+  const std::vector<Diagnostic>& diagnostics() const { return diagnostics_; }
+
+ private:
+  std::vector<Diagnostic> diagnostics_;
+};
+
+/// Levenshtein distance, for "did you mean".
+int edit_distance(const std::string& a, const std::string& b);
+/// The closest candidate within a small distance, or "".
+std::string closest_match(const std::string& word, const std::vector<std::string>& candidates);
+
+}  // namespace lash

@@ -1,0 +1,821 @@
+#include "io/model_loader.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <optional>
+#include <sstream>
+
+#include "core/expression.hpp"
+
+namespace lash {
+
+namespace {
+
+std::string fmt_num(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+std::string join(const std::vector<std::string>& v) {
+  std::string s;
+  for (size_t i = 0; i < v.size(); ++i) s += (i ? ", " : "") + v[i];
+  return s;
+}
+
+/// Collects diagnostics; knows the file name.
+struct Reporter {
+  std::string file;
+  std::vector<Diagnostic> list;
+  void error(const YAML::Node& at, const std::string& element, const std::string& message) {
+    const YAML::Mark m = at.IsDefined() ? at.Mark() : YAML::Mark::null_mark();
+    const bool from_override = m.line < 0;
+    list.push_back({file, from_override ? 0 : m.line + 1, from_override ? 0 : m.column + 1,
+                    element, message + (from_override ? " (value set with --set)" : "")});
+  }
+};
+
+/// A YAML map of one element, with the keys it accepts.
+class Section {
+ public:
+  Section(Reporter& r, YAML::Node node, YAML::Node parent, std::string element,
+          std::vector<std::string> allowed)
+      : r_(r), node_(node), element_(std::move(element)), allowed_(std::move(allowed)) {
+    if (!node_.IsDefined() || node_.IsNull()) {
+      node_ = YAML::Node(YAML::NodeType::Map);
+      empty_ = true;
+      return;
+    }
+    if (!node_.IsMap()) {
+      r_.error(node_.IsDefined() ? node_ : parent, element_,
+               "expected a map of keys (key: value), got " + kind(node_));
+      node_ = YAML::Node(YAML::NodeType::Map);
+      return;
+    }
+    for (const auto& kv : node_) {
+      const auto key = kv.first.as<std::string>("");
+      if (std::find(allowed_.begin(), allowed_.end(), key) != allowed_.end()) continue;
+      const std::string near = closest_match(key, allowed_);
+      r_.error(kv.first, element_,
+               "unknown key '" + key + "'" +
+                   (near.empty() ? ", expected one of: " + join(allowed_)
+                                 : ", did you mean '" + near + "'?"));
+    }
+  }
+
+  static std::string kind(const YAML::Node& n) {
+    if (n.IsScalar()) return "'" + n.Scalar() + "'";
+    if (n.IsSequence()) return "a list";
+    if (n.IsMap()) return "a map";
+    return "nothing";
+  }
+
+  bool has(const std::string& key) const { return node_[key].IsDefined() && !node_[key].IsNull(); }
+  YAML::Node get(const std::string& key) const { return node_[key]; }
+  const YAML::Node& node() const { return node_; }
+  const std::string& element() const { return element_; }
+  Reporter& reporter() { return r_; }
+
+  /// A number; `check` returns "" or what was expected (e.g. "> 0").
+  std::optional<double> number(const std::string& key, const std::string& units,
+                               const std::function<std::string(double)>& check = {}) {
+    if (!has(key)) return std::nullopt;
+    const YAML::Node n = node_[key];
+    double v = 0.0;
+    if (!n.IsScalar() || !YAML::convert<double>::decode(n, v) || !std::isfinite(v)) {
+      r_.error(n, element_, "'" + key + "' must be a number" + units + ", got " + kind(n));
+      return std::nullopt;
+    }
+    if (check) {
+      const std::string expected = check(v);
+      if (!expected.empty()) {
+        r_.error(n, element_, key + " must be " + expected + ", got " + fmt_num(v));
+        return std::nullopt;
+      }
+    }
+    return v;
+  }
+  double required_number(const std::string& key, const std::string& units,
+                         const std::function<std::string(double)>& check, double fallback) {
+    if (!has(key)) {
+      r_.error(node_, element_, "missing required key '" + key + "'" + units);
+      return fallback;
+    }
+    return number(key, units, check).value_or(fallback);
+  }
+  std::optional<std::string> text(const std::string& key) {
+    if (!has(key)) return std::nullopt;
+    const YAML::Node n = node_[key];
+    if (!n.IsScalar()) {
+      r_.error(n, element_, "'" + key + "' must be a single value, got " + kind(n));
+      return std::nullopt;
+    }
+    return n.Scalar();
+  }
+  std::optional<Vec2> vec2(const std::string& key, const std::string& units) {
+    if (!has(key)) return std::nullopt;
+    const YAML::Node n = node_[key];
+    double x, y;
+    if (!n.IsSequence() || n.size() != 2 || !YAML::convert<double>::decode(n[0], x) ||
+        !YAML::convert<double>::decode(n[1], y)) {
+      r_.error(n, element_, "'" + key + "' must be a pair [x, y]" + units + ", got " + kind(n));
+      return std::nullopt;
+    }
+    return Vec2(x, y);
+  }
+
+ private:
+  Reporter& r_;
+  YAML::Node node_;
+  std::string element_;
+  std::vector<std::string> allowed_;
+  bool empty_ = false;
+};
+
+// Checks used with Section::number.
+std::string positive(double v) { return v > 0 ? "" : "> 0"; }
+std::string non_negative(double v) { return v >= 0 ? "" : ">= 0"; }
+std::string unit_interval(double v) { return v > 0 && v <= 1 ? "" : "in (0, 1]"; }
+std::string poisson(double v) { return v > -1 && v < 0.5 ? "" : "in (-1, 0.5)"; }
+
+class Loader {
+ public:
+  Loader(const std::string& file) { r_.file = file; }
+
+  Model load(YAML::Node root) {
+    Model m;
+    Section top(r_, root, root, "model",
+                {"name", "description", "gravity", "ground", "bodies", "joints",
+                 "clearance_defaults", "drivers", "loads", "solver"});
+    if (!root.IsMap()) throw ModelError(r_.list);
+    m.name = top.text("name").value_or("model");
+    m.gravity = top.vec2("gravity", " (m/s²)").value_or(Vec2::Zero());
+    read_ground(top.get("ground"), root);
+    read_bodies(m, top.get("bodies"), root);
+    defaults_ = top.get("clearance_defaults");
+    if (defaults_.IsDefined() && !defaults_.IsNull() && !defaults_.IsMap())
+      r_.error(defaults_, "clearance_defaults", "expected a map, got " + Section::kind(defaults_));
+    read_joints(m, top.get("joints"), root);
+    read_drivers(m, top.get("drivers"));
+    read_loads(m, top.get("loads"));
+    read_solver(m, top.get("solver"), root);
+    if (!r_.list.empty()) throw ModelError(r_.list);
+    return m;
+  }
+
+  Reporter& reporter() { return r_; }
+
+ private:
+  // --- references --------------------------------------------------------------------------
+  int body_index(const std::string& name) const {
+    if (name == "ground") return kGround;
+    for (size_t i = 0; i < body_names_.size(); ++i)
+      if (body_names_[i] == name) return static_cast<int>(i);
+    return -2;
+  }
+  std::vector<std::string> body_choices() const {
+    std::vector<std::string> c{"ground"};
+    c.insert(c.end(), body_names_.begin(), body_names_.end());
+    return c;
+  }
+
+  /// "body.marker" or "body" (its centre of mass; the origin for the ground).
+  std::optional<PointRef> point(Section& s, const std::string& key, bool required = true) {
+    if (!s.has(key)) {
+      if (required)
+        r_.error(s.node(), s.element(), "missing required key '" + key + "' (body.marker)");
+      return std::nullopt;
+    }
+    const auto text = s.text(key);
+    if (!text) return std::nullopt;
+    return resolve_point(s.get(key), s.element(), *text);
+  }
+  std::optional<PointRef> resolve_point(const YAML::Node& at, const std::string& element,
+                                        const std::string& text) {
+    const auto dot = text.find('.');
+    const std::string body = text.substr(0, dot);
+    const int b = body_index(body);
+    if (b == -2) {
+      const std::string near = closest_match(body, body_choices());
+      r_.error(at, element, "unknown body '" + body + "' in '" + text + "', expected one of: " +
+                                join(body_choices()) +
+                                (near.empty() ? "" : " (did you mean '" + near + "'?)"));
+      return std::nullopt;
+    }
+    PointRef p;
+    p.body = b;
+    p.label = text;
+    if (dot == std::string::npos) return p;
+    const std::string marker = text.substr(dot + 1);
+    const auto& markers = b == kGround ? ground_markers_ : markers_[b];
+    std::vector<std::string> names;
+    for (const auto& mk : markers) {
+      if (mk.name == marker) {
+        p.s = mk.s_P_B;
+        return p;
+      }
+      names.push_back(mk.name);
+    }
+    const std::string near = closest_match(marker, names);
+    r_.error(at, element,
+             "unknown marker '" + marker + "' on body '" + body + "', expected one of: " +
+                 (names.empty() ? "(none defined)" : join(names)) +
+                 (near.empty() ? "" : " (did you mean '" + near + "'?)"));
+    return std::nullopt;
+  }
+  std::optional<int> body_ref(Section& s, const YAML::Node& n) {
+    if (!n.IsScalar()) {
+      r_.error(n, s.element(), "expected a body name, got " + Section::kind(n));
+      return std::nullopt;
+    }
+    const int b = body_index(n.Scalar());
+    if (b == -2) {
+      const std::string near = closest_match(n.Scalar(), body_choices());
+      r_.error(n, s.element(), "unknown body '" + n.Scalar() + "', expected one of: " +
+                                   join(body_choices()) +
+                                   (near.empty() ? "" : " (did you mean '" + near + "'?)"));
+      return std::nullopt;
+    }
+    return b;
+  }
+
+  std::vector<Marker> read_markers(Section& s) {
+    std::vector<Marker> out;
+    if (!s.has("markers")) return out;
+    const YAML::Node n = s.get("markers");
+    if (!n.IsMap()) {
+      r_.error(n, s.element(), "'markers' must be a map name: [x, y], got " + Section::kind(n));
+      return out;
+    }
+    for (const auto& kv : n) {
+      Marker mk;
+      mk.name = kv.first.as<std::string>("");
+      double x, y;
+      if (!kv.second.IsSequence() || kv.second.size() != 2 ||
+          !YAML::convert<double>::decode(kv.second[0], x) ||
+          !YAML::convert<double>::decode(kv.second[1], y)) {
+        r_.error(kv.second, s.element(),
+                 "marker '" + mk.name + "' must be [x, y] in body coordinates (m), got " +
+                     Section::kind(kv.second));
+        continue;
+      }
+      mk.s_P_B = Vec2(x, y);
+      out.push_back(mk);
+    }
+    return out;
+  }
+
+  // --- sections ----------------------------------------------------------------------------
+  void read_ground(const YAML::Node& n, const YAML::Node& root) {
+    Section s(r_, n, root, "ground", {"markers"});
+    ground_markers_ = read_markers(s);
+  }
+
+  void read_bodies(Model& m, const YAML::Node& n, const YAML::Node& root) {
+    if (!n.IsDefined() || !n.IsMap() || n.size() == 0) {
+      r_.error(n.IsDefined() ? n : root, "model",
+               "'bodies' must be a map of at least one body (name: {mass, inertia, ...})");
+      return;
+    }
+    for (const auto& kv : n) body_names_.push_back(kv.first.as<std::string>(""));
+    for (const auto& kv : n) {
+      const std::string name = kv.first.as<std::string>("");
+      Section s(r_, kv.second, kv.first, "body '" + name + "'",
+                {"mass", "inertia", "position", "angle", "angle_deg", "velocity",
+                 "angular_velocity", "markers"});
+      if (name == "ground") r_.error(kv.first, s.element(), "'ground' is reserved; rename the body");
+      Body b;
+      b.name = name;
+      b.mass = s.required_number("mass", " (kg)", positive, 1.0);
+      b.inertia = s.required_number("inertia", " (kg·m² about the centre of mass)", positive, 1.0);
+      b.r0 = s.vec2("position", " (m)").value_or(Vec2::Zero());
+      if (s.has("angle") && s.has("angle_deg"))
+        r_.error(s.get("angle_deg"), s.element(), "give 'angle' (rad) or 'angle_deg', not both");
+      b.phi0 = s.number("angle", " (rad)").value_or(0.0);
+      if (auto deg = s.number("angle_deg", " (degrees)")) b.phi0 = *deg * M_PI / 180.0;
+      b.v0 = s.vec2("velocity", " (m/s)").value_or(Vec2::Zero());
+      b.omega0 = s.number("angular_velocity", " (rad/s)").value_or(0.0);
+      b.markers = read_markers(s);
+      markers_.push_back(b.markers);
+      m.bodies.push_back(b);
+    }
+  }
+
+  /// A clearance parameter: from the joint, else from clearance_defaults.
+  YAML::Node param(Section& j, const std::string& key) const {
+    if (j.has(key)) return j.get(key);
+    if (defaults_.IsDefined() && defaults_.IsMap() && defaults_[key].IsDefined())
+      return defaults_[key];
+    return j.get(key);  // undefined: absent in both
+  }
+
+  static inline const std::vector<std::string> kClearanceKeys = {
+      "clearance", "journal_radius", "bearing_radius", "normal_law", "restitution",
+      "stiffness", "exponent", "material", "journal_material", "bearing_material",
+      "damping_max", "damping_depth", "friction", "min_impact_velocity"};
+
+  void read_joints(Model& m, const YAML::Node& n, const YAML::Node& root) {
+    if (!n.IsDefined() || n.IsNull()) return;
+    if (!n.IsMap()) {
+      r_.error(n, "model", "'joints' must be a map name: {type: ...}, got " + Section::kind(n));
+      return;
+    }
+    if (defaults_.IsDefined() && defaults_.IsMap())
+      Section(r_, defaults_, root, "clearance_defaults", kClearanceKeys);
+    for (const auto& kv : n) {
+      const std::string name = kv.first.as<std::string>("");
+      const std::string element = "joint '" + name + "'";
+      const YAML::Node type_node = kv.second.IsMap() ? kv.second["type"] : YAML::Node();
+      const std::string type = type_node.IsDefined() ? type_node.as<std::string>("") : "";
+      Joint j;
+      j.name = name;
+      std::vector<std::string> keys{"type"};
+      if (type == "revolute") {
+        j.type = JointType::revolute;
+        keys.insert(keys.end(), {"journal", "bearing"});
+        keys.insert(keys.end(), kClearanceKeys.begin(), kClearanceKeys.end());
+      } else if (type == "translational") {
+        j.type = JointType::translational;
+        keys.insert(keys.end(), {"guide", "slider", "axis"});
+      } else if (type == "fixed") {
+        j.type = JointType::fixed;
+        keys.insert(keys.end(), {"base", "attached"});
+      } else {
+        const std::vector<std::string> types{"revolute", "translational", "fixed"};
+        const std::string near = closest_match(type, types);
+        r_.error(type_node.IsDefined() ? type_node : kv.second, element,
+                 type.empty() ? "missing 'type', expected one of: revolute, translational, fixed"
+                              : "unknown joint type '" + type +
+                                    "', expected one of: revolute, translational, fixed" +
+                                    (near.empty() ? "" : " (did you mean '" + near + "'?)"));
+        Section(r_, kv.second, kv.first, element, {});  // still report its shape
+        continue;
+      }
+      Section s(r_, kv.second, kv.first, element, keys);
+      std::optional<PointRef> a, b;
+      if (j.type == JointType::revolute) {
+        a = point(s, "journal");
+        b = point(s, "bearing");
+      } else if (j.type == JointType::translational) {
+        a = point(s, "guide");
+        b = point(s, "slider");
+        if (auto ax = s.vec2("axis", " (unit vector in the guide's frame)")) {
+          if (ax->norm() < 1e-12)
+            r_.error(s.get("axis"), element, "axis must be a non-zero vector, got [0, 0]");
+          else
+            j.axis = ax->normalized();
+        }
+      } else {
+        a = point(s, "base");
+        b = point(s, "attached");
+      }
+      if (a && b) {
+        j.a = *a;
+        j.b = *b;
+        if (a->body == b->body)
+          r_.error(kv.second, element,
+                   "both ends are on body '" + (a->body == kGround ? std::string("ground")
+                                                                    : body_names_[a->body]) +
+                       "', expected two different bodies");
+        const double phi_a = a->body == kGround ? 0.0 : m.bodies[a->body].phi0;
+        const double phi_b = b->body == kGround ? 0.0 : m.bodies[b->body].phi0;
+        j.angle0 = phi_b - phi_a;
+      }
+      if (j.type == JointType::revolute) read_clearance(s, j);
+      joint_nodes_.push_back(kv.second);
+      m.joints.push_back(j);
+    }
+  }
+
+  struct Material {
+    double e = 0, nu = 0;
+  };
+  std::optional<Material> material(Section& j, const std::string& key) {
+    const YAML::Node n = param(j, key);
+    if (!n.IsDefined() || n.IsNull()) return std::nullopt;
+    Section s(r_, n, j.node(), j.element() + " " + key, {"youngs_modulus", "poisson_ratio"});
+    Material mat;
+    mat.e = s.required_number("youngs_modulus", " (Pa)", positive, 207e9);
+    mat.nu = s.required_number("poisson_ratio", "", poisson, 0.3);
+    return mat;
+  }
+
+  void read_clearance(Section& s, Joint& j) {
+    const bool is_clearance = s.has("clearance") || s.has("bearing_radius");
+    if (!is_clearance) return;
+    // Joint keys first, then clearance_defaults: wrap both in one lookup section.
+    YAML::Node merged(YAML::NodeType::Map);
+    for (const auto& k : kClearanceKeys) {
+      const YAML::Node v = param(s, k);
+      if (v.IsDefined()) merged[k] = v;
+    }
+    Section c(r_, merged, s.node(), s.element(), kClearanceKeys);
+    Clearance cl;
+    const auto clearance = c.number("clearance", " (m)", non_negative);
+    const auto rj = c.number("journal_radius", " (m)", positive);
+    const auto rb = c.number("bearing_radius", " (m)", positive);
+    if (s.has("clearance") && clearance && *clearance == 0.0) return;  // clearance: 0 → ideal
+    if (clearance && rj) {
+      cl.clearance = *clearance;
+      cl.journal_radius = *rj;
+      cl.bearing_radius = *rj + *clearance;
+      if (rb && std::abs(*rb - cl.bearing_radius) > 1e-12) {
+        r_.error(c.get("bearing_radius"), s.element(),
+                 "bearing_radius " + fmt_num(*rb) + " disagrees with journal_radius + clearance = " +
+                     fmt_num(cl.bearing_radius) + "; give two of the three");
+      }
+    } else if (clearance && rb) {
+      cl.clearance = *clearance;
+      cl.bearing_radius = *rb;
+      cl.journal_radius = *rb - *clearance;
+    } else if (rj && rb) {
+      cl.journal_radius = *rj;
+      cl.bearing_radius = *rb;
+      cl.clearance = *rb - *rj;
+    } else {
+      r_.error(s.node(), s.element(),
+               "a clearance joint needs two of clearance, journal_radius, bearing_radius "
+               "(here or in clearance_defaults)");
+      return;
+    }
+    if (!(cl.clearance > 0) || !(cl.journal_radius > 0)) {
+      r_.error(s.node(), s.element(),
+               "clearance must be > 0 and smaller than the bearing radius, got clearance " +
+                   fmt_num(cl.clearance) + " m, journal radius " + fmt_num(cl.journal_radius) +
+                   " m");
+      return;
+    }
+    // Normal law.
+    const std::string law = c.text("normal_law").value_or("lankarani_nikravesh");
+    if (auto l = normal_law_from_name(law)) {
+      cl.normal_law = *l;
+    } else {
+      std::vector<std::string> names;
+      for (const auto& i : kNormalLaws) names.emplace_back(i.name);
+      const std::string near = closest_match(law, names);
+      r_.error(c.get("normal_law"), s.element(),
+               "unknown normal_law '" + law + "', expected one of: " + join(names) +
+                   (near.empty() ? "" : " (did you mean '" + near + "'?)"));
+    }
+    cl.contact.exponent = c.number("exponent", "", positive).value_or(1.5);
+    if (auto k = c.number("stiffness", " (N/m^exponent)", positive)) {
+      cl.contact.stiffness = *k;
+    } else if (!c.has("stiffness")) {
+      auto common = material(s, "material");
+      auto mj = material(s, "journal_material");
+      auto mb = material(s, "bearing_material");
+      if (!mj) mj = common;
+      if (!mb) mb = common;
+      if (!mj || !mb) {
+        r_.error(s.node(), s.element(),
+                 "give the contact 'stiffness' or a 'material' {youngs_modulus, poisson_ratio} "
+                 "(here or in clearance_defaults)");
+      } else {
+        cl.contact.stiffness = hertz_cylinder_stiffness(cl.bearing_radius, cl.journal_radius,
+                                                        mb->e, mb->nu, mj->e, mj->nu);
+      }
+    }
+    const bool damped = cl.normal_law == NormalLaw::hunt_crossley ||
+                        cl.normal_law == NormalLaw::lankarani_nikravesh ||
+                        cl.normal_law == NormalLaw::flores;
+    if (damped) {
+      if (!c.has("restitution"))
+        r_.error(s.node(), s.element(), "normal_law " + law + " needs 'restitution' in (0, 1]");
+      cl.contact.restitution = c.number("restitution", "", unit_interval).value_or(1.0);
+    }
+    if (cl.normal_law == NormalLaw::impact) {
+      cl.contact.damping_max = c.required_number("damping_max", " (C_max, N·s/m)", non_negative, 0);
+      cl.contact.damping_depth = c.required_number("damping_depth", " (d_max, m)", positive, 1e-5);
+    }
+    cl.min_impact_velocity = c.number("min_impact_velocity", " (m/s)", positive).value_or(1e-3);
+    read_friction(c, s.element(), cl);
+    j.clearance = cl;
+  }
+
+  void read_friction(Section& c, const std::string& element, Clearance& cl) {
+    if (!c.has("friction")) return;
+    Section f(r_, c.get("friction"), c.node(), element + " friction",
+              {"law", "mu", "v0", "v1", "mu_static", "mu_dynamic", "v_static", "v_dynamic"});
+    const std::string law = f.text("law").value_or("none");
+    const auto l = friction_law_from_name(law);
+    if (!l) {
+      std::vector<std::string> names;
+      for (const auto& i : kFrictionLaws) names.emplace_back(i.name);
+      const std::string near = closest_match(law, names);
+      r_.error(f.get("law"), f.element(),
+               "unknown friction law '" + law + "', expected one of: " + join(names) +
+                   (near.empty() ? "" : " (did you mean '" + near + "'?)"));
+      return;
+    }
+    cl.friction_law = *l;
+    auto& p = cl.friction;
+    switch (*l) {
+      case FrictionLaw::none: break;
+      case FrictionLaw::coulomb: p.mu = f.required_number("mu", "", non_negative, 0); break;
+      case FrictionLaw::ambrosio:
+        p.mu = f.required_number("mu", "", non_negative, 0);
+        p.v0 = f.required_number("v0", " (m/s)", non_negative, 0);
+        p.v1 = f.required_number("v1", " (m/s)", positive, 1);
+        if (p.v1 <= p.v0)
+          r_.error(f.get("v1"), f.element(), "v1 must be > v0, got v0 = " + fmt_num(p.v0) +
+                                                 ", v1 = " + fmt_num(p.v1));
+        break;
+      case FrictionLaw::adams_stepped:
+        p.mu_static = f.required_number("mu_static", "", non_negative, 0);
+        p.mu_dynamic = f.required_number("mu_dynamic", "", non_negative, 0);
+        p.v_static = f.required_number("v_static", " (m/s)", positive, 1e-4);
+        p.v_dynamic = f.required_number("v_dynamic", " (m/s)", positive, 1e-2);
+        if (p.v_dynamic <= p.v_static)
+          r_.error(f.get("v_dynamic"), f.element(),
+                   "v_dynamic must be > v_static, got v_static = " + fmt_num(p.v_static) +
+                       ", v_dynamic = " + fmt_num(p.v_dynamic));
+        break;
+    }
+  }
+
+  void read_drivers(Model& m, const YAML::Node& n) {
+    if (!n.IsDefined() || n.IsNull()) return;
+    if (!n.IsMap()) {
+      r_.error(n, "model", "'drivers' must be a map name: {joint: ...}, got " + Section::kind(n));
+      return;
+    }
+    for (const auto& kv : n) {
+      const std::string name = kv.first.as<std::string>("");
+      Section s(r_, kv.second, kv.first, "driver '" + name + "'",
+                {"joint", "speed_rpm", "speed", "motion", "initial"});
+      Driver d;
+      d.name = name;
+      const auto joint = s.text("joint");
+      if (!joint) {
+        if (!s.has("joint")) r_.error(s.node(), s.element(), "missing required key 'joint'");
+        continue;
+      }
+      std::vector<std::string> names;
+      for (size_t i = 0; i < m.joints.size(); ++i) {
+        names.push_back(m.joints[i].name);
+        if (m.joints[i].name == *joint) d.joint = static_cast<int>(i);
+      }
+      if (d.joint < 0) {
+        const std::string near = closest_match(*joint, names);
+        r_.error(s.get("joint"), s.element(),
+                 "unknown joint '" + *joint + "'" +
+                     (near.empty() ? "" : ", did you mean '" + near + "'?"));
+        continue;
+      }
+      const Joint& j = m.joints[d.joint];
+      if (j.type == JointType::fixed || j.clearance) {
+        r_.error(s.get("joint"), s.element(),
+                 "joint '" + *joint + "' is " +
+                     (j.clearance ? "a clearance joint" : std::string("a fixed joint")) +
+                     ", expected an ideal revolute or translational joint");
+        continue;
+      }
+      const int given = s.has("speed_rpm") + s.has("speed") + s.has("motion");
+      if (given != 1) {
+        r_.error(s.node(), s.element(),
+                 "give exactly one of speed_rpm, speed (rad/s or m/s) or motion (expression of "
+                 "time), got " + std::to_string(given));
+        continue;
+      }
+      if (auto rpm = s.number("speed_rpm", " (rev/min)")) {
+        if (j.type != JointType::revolute)
+          r_.error(s.get("speed_rpm"), s.element(), "speed_rpm needs a revolute joint");
+        d.speed = *rpm * 2.0 * M_PI / 60.0;
+      }
+      if (auto sp = s.number("speed", " (rad/s or m/s)")) d.speed = *sp;
+      if (auto ex = s.text("motion")) {
+        d.profile = DriverProfile::expression;
+        d.expression = *ex;
+        const std::string err = check_expression(*ex, body_names_);
+        if (!err.empty()) r_.error(s.get("motion"), s.element(), "bad expression: " + err);
+      }
+      // Initial coordinate: from the initial poses unless given.
+      if (j.type == JointType::revolute) {
+        const double pa = j.a.body == kGround ? 0.0 : m.bodies[j.a.body].phi0;
+        const double pb = j.b.body == kGround ? 0.0 : m.bodies[j.b.body].phi0;
+        d.initial = pa - pb;
+      } else {
+        auto pose = [&](const PointRef& p, Eigen::Matrix2d& A) {
+          if (p.body == kGround) {
+            A.setIdentity();
+            return Vec2(p.s);
+          }
+          A = rotation(m.bodies[p.body].phi0);
+          return Vec2(m.bodies[p.body].r0 + A * p.s);
+        };
+        Eigen::Matrix2d Aa, Ab;
+        const Vec2 ra = pose(j.a, Aa), rb = pose(j.b, Ab);
+        d.initial = (rb - ra).dot(Aa * j.axis);
+      }
+      if (auto init = s.number("initial", " (rad or m)")) d.initial = *init;
+      m.drivers.push_back(d);
+    }
+  }
+
+  void read_loads(Model& m, const YAML::Node& n) {
+    if (!n.IsDefined() || n.IsNull()) return;
+    if (!n.IsMap()) {
+      r_.error(n, "model", "'loads' must be a map name: {type: ...}, got " + Section::kind(n));
+      return;
+    }
+    for (const auto& kv : n) {
+      const std::string name = kv.first.as<std::string>("");
+      const std::string element = "load '" + name + "'";
+      const YAML::Node tn = kv.second.IsMap() ? kv.second["type"] : YAML::Node();
+      const std::string type = tn.IsDefined() ? tn.as<std::string>("") : "";
+      const std::vector<std::string> types{"force", "torque", "spring_damper",
+                                           "torsional_spring_damper"};
+      Load l;
+      l.name = name;
+      auto expr = [&](Section& s, const std::string& key, std::string& out) {
+        if (!s.has(key)) return;
+        out = s.get(key).IsScalar() ? s.get(key).Scalar() : "";
+        const std::string err = check_expression(out, body_names_);
+        if (!err.empty()) r_.error(s.get(key), element, "bad expression in '" + key + "': " + err);
+      };
+      if (type == "force") {
+        Section s(r_, kv.second, kv.first, element, {"type", "point", "fx", "fy"});
+        l.type = LoadType::force;
+        if (auto p = point(s, "point")) l.a = *p;
+        expr(s, "fx", l.fx);
+        expr(s, "fy", l.fy);
+      } else if (type == "torque") {
+        Section s(r_, kv.second, kv.first, element, {"type", "body", "torque"});
+        l.type = LoadType::torque;
+        if (!s.has("body")) r_.error(s.node(), element, "missing required key 'body'");
+        else if (auto b = body_ref(s, s.get("body"))) l.body_a = *b;
+        expr(s, "torque", l.torque);
+      } else if (type == "spring_damper") {
+        Section s(r_, kv.second, kv.first, element,
+                  {"type", "from", "to", "stiffness", "damping", "free_length"});
+        l.type = LoadType::spring_damper;
+        auto a = point(s, "from"), b = point(s, "to");
+        l.stiffness = s.number("stiffness", " (N/m)", non_negative).value_or(0.0);
+        l.damping = s.number("damping", " (N·s/m)", non_negative).value_or(0.0);
+        if (a && b) {
+          l.a = *a;
+          l.b = *b;
+          auto world = [&](const PointRef& p) {
+            return p.body == kGround
+                       ? Vec2(p.s)
+                       : Vec2(m.bodies[p.body].r0 + rotation(m.bodies[p.body].phi0) * p.s);
+          };
+          l.free_length = (world(*b) - world(*a)).norm();
+        }
+        if (auto fl = s.number("free_length", " (m)", non_negative)) l.free_length = *fl;
+      } else if (type == "torsional_spring_damper") {
+        Section s(r_, kv.second, kv.first, element,
+                  {"type", "bodies", "stiffness", "damping", "free_angle"});
+        l.type = LoadType::torsional_spring_damper;
+        const YAML::Node bn = s.get("bodies");
+        if (!bn.IsDefined() || !bn.IsSequence() || bn.size() != 2) {
+          r_.error(bn.IsDefined() ? bn : s.node(), element,
+                   "'bodies' must be a pair [body_a, body_b]");
+        } else {
+          auto a = body_ref(s, bn[0]), b = body_ref(s, bn[1]);
+          if (a && b) {
+            l.body_a = *a;
+            l.body_b = *b;
+            const double pa = *a == kGround ? 0.0 : m.bodies[*a].phi0;
+            const double pb = *b == kGround ? 0.0 : m.bodies[*b].phi0;
+            l.angle0 = pb - pa;
+          }
+        }
+        l.stiffness = s.number("stiffness", " (N·m/rad)", non_negative).value_or(0.0);
+        l.damping = s.number("damping", " (N·m·s/rad)", non_negative).value_or(0.0);
+        if (auto fa = s.number("free_angle", " (rad)")) l.angle0 = *fa;
+      } else {
+        const std::string near = closest_match(type, types);
+        r_.error(tn.IsDefined() ? tn : kv.second, element,
+                 (type.empty() ? std::string("missing 'type'") : "unknown load type '" + type + "'") +
+                     ", expected one of: " + join(types) +
+                     (near.empty() || type.empty() ? "" : " (did you mean '" + near + "'?)"));
+        continue;
+      }
+      m.loads.push_back(l);
+    }
+  }
+
+  void read_solver(Model& m, const YAML::Node& n, const YAML::Node& root) {
+    Section s(r_, n, root, "solver",
+              {"integrator", "rtol", "atol", "end_time", "output_interval", "max_step",
+               "max_steps", "initial_state", "baumgarte"});
+    SolverSettings& st = m.solver;
+    if (auto integ = s.text("integrator")) {
+      if (*integ == "dopri5") st.integrator = IntegratorKind::dopri5;
+      else if (*integ == "bdf" || *integ == "cvode") st.integrator = IntegratorKind::bdf;
+      else
+        r_.error(s.get("integrator"), "solver",
+                 "unknown integrator '" + *integ + "', expected one of: dopri5, bdf");
+    }
+    st.rtol = s.number("rtol", "", positive).value_or(st.rtol);
+    st.atol = s.number("atol", "", positive).value_or(st.atol);
+    st.end_time = s.required_number("end_time", " (s)", positive, 1.0);
+    st.output_interval = s.number("output_interval", " (s)", positive).value_or(st.end_time / 1000);
+    st.max_step = s.number("max_step", " (s)", non_negative).value_or(0.0);
+    if (auto ms = s.number("max_steps", "", positive)) st.max_steps = static_cast<long>(*ms);
+    if (auto rule = s.text("initial_state")) {
+      if (*rule == "ideal") st.initial_state = InitialStateRule::ideal;
+      else if (*rule == "given") st.initial_state = InitialStateRule::given;
+      else
+        r_.error(s.get("initial_state"), "solver",
+                 "unknown initial_state '" + *rule + "', expected one of: ideal, given");
+    }
+    if (s.has("baumgarte")) {
+      Section b(r_, s.get("baumgarte"), s.node(), "solver baumgarte", {"alpha", "beta"});
+      st.baumgarte_alpha = b.number("alpha", " (1/s)", non_negative).value_or(st.baumgarte_alpha);
+      st.baumgarte_beta = b.number("beta", " (1/s)", non_negative).value_or(st.baumgarte_beta);
+    }
+    if (st.output_interval > st.end_time)
+      r_.error(s.get("output_interval"), "solver",
+               "output_interval must be <= end_time, got " + fmt_num(st.output_interval) +
+                   " > " + fmt_num(st.end_time));
+  }
+
+  Reporter r_;
+  YAML::Node defaults_;
+  std::vector<std::string> body_names_;
+  std::vector<std::vector<Marker>> markers_;
+  std::vector<Marker> ground_markers_;
+  std::vector<YAML::Node> joint_nodes_;
+};
+
+/// Applies "a.b.c=value": the parents must exist; the last key may be new.
+void apply_override(YAML::Node root, const std::string& spec, Reporter& r) {
+  const auto eq = spec.find('=');
+  if (eq == std::string::npos || eq == 0) {
+    r.list.push_back({"--set", 0, 0, "", "expected KEY.PATH=VALUE, got '" + spec + "'"});
+    return;
+  }
+  const std::string path = spec.substr(0, eq), value = spec.substr(eq + 1);
+  std::vector<std::string> keys;
+  std::stringstream ss(path);
+  for (std::string k; std::getline(ss, k, '.');) keys.push_back(k);
+  YAML::Node node = root;
+  std::string walked;
+  for (size_t i = 0; i + 1 < keys.size(); ++i) {
+    walked += (i ? "." : "") + keys[i];
+    if (!node.IsMap() || !node[keys[i]].IsDefined()) {
+      std::vector<std::string> names;
+      if (node.IsMap())
+        for (const auto& kv : node) names.push_back(kv.first.as<std::string>(""));
+      const std::string near = closest_match(keys[i], names);
+      r.list.push_back({"--set " + path, 0, 0, "",
+                        "no '" + walked + "' in the model" +
+                            (near.empty() ? "" : ", did you mean '" + near + "'?")});
+      return;
+    }
+    node = node[keys[i]];
+  }
+  if (!node.IsMap()) {
+    r.list.push_back({"--set " + path, 0, 0, "", "'" + walked + "' is not a map"});
+    return;
+  }
+  node[keys.back()] = YAML::Node(value);
+}
+
+LoadedModel load_root(YAML::Node root, const std::string& filename,
+                      const std::vector<std::string>& overrides) {
+  Reporter over;
+  over.file = filename;
+  for (const auto& o : overrides) apply_override(root, o, over);
+  if (!over.list.empty()) throw ModelError(over.list);
+  Loader loader(filename);
+  LoadedModel out;
+  out.model = loader.load(root);
+  out.model.source = filename;
+  out.resolved_yaml = YAML::Dump(root);
+  return out;
+}
+
+}  // namespace
+
+LoadedModel load_model_text(const std::string& text, const std::string& filename,
+                            const std::vector<std::string>& overrides) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    throw ModelError({{filename, e.mark.line + 1, e.mark.column + 1, "",
+                       "not valid YAML: " + e.msg}});
+  }
+  if (!root.IsMap())
+    throw ModelError({{filename, 1, 1, "",
+                       "expected a model (a map with bodies, joints, solver, ...), got " +
+                           Section::kind(root)}});
+  return load_root(root, filename, overrides);
+}
+
+LoadedModel load_model_file(const std::string& path, const std::vector<std::string>& overrides) {
+  std::ifstream in(path);
+  if (!in) throw ModelError({{path, 0, 0, "", "cannot open the model file"}});
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return load_model_text(ss.str(), path, overrides);
+}
+
+}  // namespace lash

@@ -1,0 +1,26 @@
+#pragma once
+/// @file model_loader.hpp
+/// Reads a YAML model file (format: docs/model-format.md) into a validated Model. Every problem
+/// in the file is collected and thrown together as a ModelError; nothing is run on a bad model.
+#include <string>
+#include <vector>
+
+#include "core/model.hpp"
+#include "io/diagnostics.hpp"
+
+namespace lash {
+
+struct LoadedModel {
+  Model model;
+  std::string resolved_yaml;  ///< the model text after --set overrides, as run
+};
+
+/// Loads `path`, applying overrides "dotted.path=value" (e.g. joints.rod_slider.clearance=1e-4)
+/// before validation. Throws ModelError (bad model or override) with every problem found.
+LoadedModel load_model_file(const std::string& path, const std::vector<std::string>& overrides = {});
+
+/// As load_model_file, from text; `filename` is used in messages.
+LoadedModel load_model_text(const std::string& text, const std::string& filename,
+                            const std::vector<std::string>& overrides = {});
+
+}  // namespace lash
