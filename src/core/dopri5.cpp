@@ -94,7 +94,7 @@ class Dopri5 final : public Integrator {
 
   double initial_step() {
     // Hairer's starting-step heuristic (Solving ODEs I, §II.4).
-    const double d0 = error_norm(y_ * 0.0 + y_, Eigen::VectorXd::Zero(p_.n), y_);
+    const double d0 = error_norm(y_, Eigen::VectorXd::Zero(p_.n), y_);
     const double d1n = error_norm(k1_, Eigen::VectorXd::Zero(p_.n), y_);
     double h0 = (d0 < 1e-5 || d1n < 1e-5) ? 1e-6 : 0.01 * d0 / d1n;
     if (o_.max_step > 0) h0 = std::min(h0, o_.max_step);
@@ -114,7 +114,7 @@ class Dopri5 final : public Integrator {
       if (!f(t_, y_, k1_))
         return "the right-hand side is not finite or the constraints are singular";
       need_k1_ = false;
-      if (h_ <= 0.0) h_ = initial_step();
+      if (h_ <= 0.0) h_ = o_.first_step > 0 ? o_.first_step : initial_step();
     }
     bool rejected_last = false;
     for (;;) {

@@ -23,6 +23,7 @@ struct IntegratorOptions {
   double atol = 1e-9;
   double max_step = 0.0;    ///< 0: unlimited
   long max_steps = 50'000'000;
+  double first_step = 0.0;  ///< 0: chosen automatically
 };
 
 struct IntegratorStats {

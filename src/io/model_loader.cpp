@@ -42,18 +42,15 @@ struct Reporter {
 /// A YAML map of one element, with the keys it accepts.
 class Section {
  public:
-  Section(Reporter& r, YAML::Node node, YAML::Node parent, std::string element,
+  // yaml-cpp trap: assigning to or from an undefined ("zombie") Node throws or rebinds the
+  // target's content, so the node is chosen once, in the initializer.
+  Section(Reporter& r, const YAML::Node& node, const YAML::Node& parent, std::string element,
           std::vector<std::string> allowed)
-      : r_(r), node_(node), element_(std::move(element)), allowed_(std::move(allowed)) {
-    if (!node_.IsDefined() || node_.IsNull()) {
-      node_ = YAML::Node(YAML::NodeType::Map);
-      empty_ = true;
-      return;
-    }
-    if (!node_.IsMap()) {
-      r_.error(node_.IsDefined() ? node_ : parent, element_,
-               "expected a map of keys (key: value), got " + kind(node_));
-      node_ = YAML::Node(YAML::NodeType::Map);
+      : r_(r), node_(usable(node) ? node : YAML::Node(YAML::NodeType::Map)),
+        element_(std::move(element)), allowed_(std::move(allowed)) {
+    if (!node.IsDefined() || node.IsNull()) return;
+    if (!node.IsMap()) {
+      r_.error(node, element_, "expected a map of keys (key: value), got " + kind(node));
       return;
     }
     for (const auto& kv : node_) {
@@ -67,6 +64,7 @@ class Section {
     }
   }
 
+  static bool usable(const YAML::Node& n) { return n.IsDefined() && n.IsMap(); }
   static std::string kind(const YAML::Node& n) {
     if (n.IsScalar()) return "'" + n.Scalar() + "'";
     if (n.IsSequence()) return "a list";
@@ -133,7 +131,6 @@ class Section {
   YAML::Node node_;
   std::string element_;
   std::vector<std::string> allowed_;
-  bool empty_ = false;
 };
 
 // Checks used with Section::number.
@@ -156,7 +153,7 @@ class Loader {
     m.gravity = top.vec2("gravity", " (m/s²)").value_or(Vec2::Zero());
     read_ground(top.get("ground"), root);
     read_bodies(m, top.get("bodies"), root);
-    defaults_ = top.get("clearance_defaults");
+    if (top.has("clearance_defaults")) defaults_.reset(top.get("clearance_defaults"));
     if (defaults_.IsDefined() && !defaults_.IsNull() && !defaults_.IsMap())
       r_.error(defaults_, "clearance_defaults", "expected a map, got " + Section::kind(defaults_));
     read_joints(m, top.get("joints"), root);
@@ -769,7 +766,7 @@ void apply_override(YAML::Node root, const std::string& spec, Reporter& r) {
                             (near.empty() ? "" : ", did you mean '" + near + "'?")});
       return;
     }
-    node = node[keys[i]];
+    node.reset(node[keys[i]]);
   }
   if (!node.IsMap()) {
     r.list.push_back({"--set " + path, 0, 0, "", "'" + walked + "' is not a map"});

@@ -1,0 +1,151 @@
+// The integrators on problems with known solutions: convergence order, dense output, events.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "core/integrator.hpp"
+
+using namespace lash;
+
+namespace {
+
+// y'' = −y: y = cos t.
+OdeProblem oscillator() {
+  OdeProblem p;
+  p.n = 2;
+  p.rhs = [](double, const double* y, double* dy) {
+    dy[0] = y[1];
+    dy[1] = -y[0];
+    return true;
+  };
+  return p;
+}
+
+// Max error |y − (cos t, −sin t)| over outputs every 0.37 s to t = 10, stepping at fixed h.
+double fixed_step_error(std::unique_ptr<Integrator> (*make)(OdeProblem, IntegratorOptions),
+                        double h) {
+  IntegratorOptions o;
+  o.rtol = 1e10;  // never reject: the step is max_step
+  o.atol = 1e10;
+  o.max_step = h;
+  auto integ = make(oscillator(), o);
+  Eigen::VectorXd y(2);
+  y << 1, 0;
+  integ->reset(0, y);
+  double err = 0;
+  for (double t = 0.37; t <= 10; t += 0.37) {
+    const Advance a = integ->advance(t, y);
+    EXPECT_EQ(a.kind, Advance::reached);
+    err = std::max(err, std::hypot(y[0] - std::cos(t), y[1] + std::sin(t)));
+  }
+  return err;
+}
+
+}  // namespace
+
+TEST(Dopri5, FifthOrderConvergenceThroughDenseOutput) {
+  // Outputs fall between steps, so this measures the dense output as well (4th-order
+  // interpolant, local error O(h⁵)): the observed global order must be 4 to 5.
+  const double e1 = fixed_step_error(make_dopri5, 0.1), e2 = fixed_step_error(make_dopri5, 0.05);
+  const double order = std::log2(e1 / e2);
+  EXPECT_GT(order, 3.5) << e1 << " " << e2;
+  EXPECT_LT(order, 5.5) << e1 << " " << e2;
+  EXPECT_LT(e2, 1e-6);
+}
+
+TEST(Dopri5, StepEndpointsAreFifthOrder) {
+  // Outputs exactly on the step grid (h = 0.1, output every 0.5): order 5 within 0.5.
+  auto err_at = [](double h) {
+    IntegratorOptions o;
+    o.rtol = o.atol = 1e10;
+    o.max_step = h;
+    o.first_step = h;
+    auto integ = make_dopri5(oscillator(), o);
+    Eigen::VectorXd y(2);
+    y << 1, 0;
+    integ->reset(0, y);
+    integ->advance(5.0, y);
+    return std::hypot(y[0] - std::cos(5.0), y[1] + std::sin(5.0));  // amplitude and phase
+  };
+  const double order = std::log2(err_at(0.1) / err_at(0.05));
+  EXPECT_NEAR(order, 5.0, 0.5);
+}
+
+TEST(Dopri5, AdaptiveToleranceIsMet) {
+  IntegratorOptions o;
+  o.rtol = 1e-9;
+  o.atol = 1e-12;
+  auto integ = make_dopri5(oscillator(), o);
+  Eigen::VectorXd y(2);
+  y << 1, 0;
+  integ->reset(0, y);
+  integ->advance(20.0, y);
+  EXPECT_NEAR(y[0], std::cos(20.0), 1e-7);
+  EXPECT_GT(integ->stats().steps, 10);
+}
+
+namespace {
+// A ball dropped from 1 m: event when height falls through zero (g = −height rising).
+OdeProblem falling_ball() {
+  OdeProblem p;
+  p.n = 2;
+  p.n_events = 1;
+  p.rhs = [](double, const double* y, double* dy) {
+    dy[0] = y[1];
+    dy[1] = -9.81;
+    return true;
+  };
+  p.events = [](double, const double* y, double* g) { g[0] = -y[0]; };
+  return p;
+}
+
+void check_event(std::unique_ptr<Integrator> integ, double tol) {
+  Eigen::VectorXd y(2);
+  y << 1, 0;
+  integ->reset(0, y);
+  const Advance a = integ->advance(2.0, y);
+  ASSERT_EQ(a.kind, Advance::event);
+  EXPECT_NEAR(a.t, std::sqrt(2 / 9.81), tol);
+  EXPECT_LE(y[0], 0.0);  // returned just past the crossing
+  EXPECT_NEAR(y[1], -std::sqrt(2 * 9.81), 1e3 * tol);
+}
+}  // namespace
+
+TEST(Dopri5, LocatesEventOnDenseOutput) {
+  IntegratorOptions o;
+  o.rtol = 1e-10;
+  o.atol = 1e-12;
+  check_event(make_dopri5(falling_ball(), o), 1e-9);
+}
+
+TEST(CvodeBdf, OscillatorAndEvent) {
+  IntegratorOptions o;
+  o.rtol = 1e-10;
+  o.atol = 1e-12;
+  auto integ = make_cvode_bdf(oscillator(), o);
+  Eigen::VectorXd y(2);
+  y << 1, 0;
+  integ->reset(0, y);
+  integ->advance(3.0, y);
+  EXPECT_NEAR(y[0], std::cos(3.0), 1e-6);
+  check_event(make_cvode_bdf(falling_ball(), o), 1e-7);
+}
+
+TEST(Dopri5, ReportsStepUnderflowInsteadOfHanging) {
+  // y' = 1/(1 − t) blows up at t = 1.
+  OdeProblem p;
+  p.n = 1;
+  p.rhs = [](double t, const double*, double* dy) {
+    dy[0] = 1.0 / (1.0 - t);
+    return std::isfinite(dy[0]) && t < 1.0;
+  };
+  IntegratorOptions o;
+  auto integ = make_dopri5(p, o);
+  Eigen::VectorXd y(1);
+  y << 0;
+  integ->reset(0, y);
+  const Advance a = integ->advance(2.0, y);
+  EXPECT_EQ(a.kind, Advance::failure);
+  EXPECT_NEAR(a.t, 1.0, 1e-3);
+  EXPECT_FALSE(a.message.empty());
+}

@@ -1,0 +1,240 @@
+// Rigid-body dynamics with ideal joints against closed forms and against itself.
+#include <cmath>
+
+#include "test_support.hpp"
+
+using namespace lash;
+using namespace lash::test;
+
+namespace {
+std::string num(double v) {
+  char b[64];
+  std::snprintf(b, sizeof b, "%.17g", v);
+  return b;
+}
+double agm(double a, double b) {
+  for (int i = 0; i < 40; ++i) {
+    const double an = 0.5 * (a + b);
+    b = std::sqrt(a * b);
+    a = an;
+  }
+  return a;
+}
+}  // namespace
+
+TEST(Pendulum, LargeAmplitudePeriodMatchesEllipticClosedForm) {
+  // Physical pendulum: a 0.4 m bar pivoted at one end, released from rest at θ0 = 1 rad.
+  // ω0² = m g d / (I_cm + m d²); exact period T = 2π / (ω0 AGM(1, cos(θ0/2))).
+  const double m = 2.0, len = 0.4, d = len / 2, icm = m * len * len / 12, g = 9.81, th0 = 1.0;
+  const double w0 = std::sqrt(m * g * d / (icm + m * d * d));
+  const double period = 2 * M_PI / (w0 * agm(1.0, std::cos(th0 / 2)));
+  const std::string yaml = R"Y(
+gravity: [0, -9.81]
+bodies:
+  bar:
+    mass: )Y" + num(m) + R"Y(
+    inertia: )Y" + num(icm) + R"Y(
+    position: [)Y" + num(d * std::sin(th0)) + ", " + num(-d * std::cos(th0)) + R"Y(]
+    angle: )Y" + num(th0) + R"Y(
+    markers: {P: [0, )Y" + num(d) + R"Y(]}
+joints:
+  pivot: {type: revolute, journal: bar.P, bearing: ground}
+solver:
+  rtol: 1e-10
+  atol: 1e-12
+  end_time: )Y" + num(period) + R"Y(
+  output_interval: )Y" + num(period / 4) + R"Y(
+  initial_state: given
+)Y";
+  const SimRun r = run_text(yaml);
+  ASSERT_TRUE(r.result.status.ok) << r.result.status.message;
+  const auto& phi = r.rec->data.at("bar.phi");
+  const auto& omega = r.rec->data.at("bar.omega");
+  ASSERT_EQ(phi.size(), 5u);
+  EXPECT_NEAR(phi[2], -th0, 1e-7);  // half period: the other extreme
+  EXPECT_NEAR(phi[4], th0, 1e-7);   // full period: back at rest at θ0
+  EXPECT_NEAR(omega[4], 0.0, 1e-6);
+  EXPECT_NEAR(phi[1], 0.0, 1e-7);   // quarter period: through the bottom
+  // Energy: the pivot does no work, so kinetic + potential stays put.
+  const auto& bal = r.rec->data.at("energy.balance");
+  EXPECT_NEAR(bal.back(), bal.front(), 1e-9);
+  EXPECT_LT(r.result.max_constraint_violation, 1e-10);
+}
+
+namespace {
+// Ideal slider-crank, crank r, rod l, constant ω: closed-form slider position and acceleration.
+struct SliderCrank {
+  double r = 0.05, l = 0.12, w = 5000 * 2 * M_PI / 60;
+  double x(double t) const {
+    const double th = w * t;
+    return r * std::cos(th) + std::sqrt(l * l - r * r * std::sin(th) * std::sin(th));
+  }
+  double ax(double t) const {
+    const double th = w * t, s = std::sin(th), c = std::cos(th);
+    const double root = std::sqrt(l * l - r * r * s * s), u = r * r * s * c;
+    return -r * c * w * w - r * r * std::cos(2 * th) * w * w / root -
+           u * u * w * w / (root * root * root);
+  }
+};
+}  // namespace
+
+TEST(SliderCrank, IdealKinematicsMatchClosedForm) {
+  // The Flores example with its clearance closed (clearance: 0 makes the joint ideal).
+  const SimRun r = run_example("flores_slider_crank.yaml", {"joints.rod_slider.clearance=0",
+                                                         "solver.end_time=0.012"});
+  ASSERT_TRUE(r.result.status.ok) << r.result.status.message;
+  const SliderCrank sc;
+  double ex = 0, ea = 0;
+  for (size_t i = 0; i < r.rec->time.size(); ++i) {
+    const double t = r.rec->time[i];
+    ex = std::max(ex, std::abs(r.rec->data.at("slider.x")[i] - sc.x(t)));
+    ea = std::max(ea, std::abs(r.rec->data.at("slider.ax")[i] - sc.ax(t)));
+  }
+  // Default tolerances (rtol 1e-6, atol 1e-9): errors well inside rtol relative to the stroke.
+  EXPECT_LT(ex, 2e-7);   // m, of x ~0.17 m
+  EXPECT_LT(ea, 0.05);   // m/s², of peaks ~2e4
+  // mechanisms.md hand-calculated check values.
+  EXPECT_NEAR(r.rec->data.at("slider.ax")[0], -19419, 1.0);
+  EXPECT_NEAR(sc.ax(M_PI / sc.w), 7996, 1.0);
+  EXPECT_NEAR(r.rec->data.at("crank.omega")[0], 523.6, 0.01);
+  EXPECT_LT(r.result.max_constraint_violation, 1e-7);
+}
+
+TEST(SliderCrank, DrivingTorqueEqualsRateOfMechanicalEnergy) {
+  // Two computations of the driver's effort: its multiplier λ, and d(T + V)/dt / ω.
+  const SimRun r = run_example("flores_slider_crank.yaml", {"joints.rod_slider.clearance=0",
+                                                         "solver.end_time=0.012",
+                                                         "solver.rtol=1e-10",
+                                                         "solver.atol=1e-13"});
+  ASSERT_TRUE(r.result.status.ok);
+  const auto& t = r.rec->time;
+  const auto& ke = r.rec->data.at("energy.kinetic");
+  const auto& pe = r.rec->data.at("energy.potential");
+  const auto& tq = r.rec->data.at("crank.torque");
+  const double w = 5000 * 2 * M_PI / 60;
+  double peak = 0, err = 0;
+  for (size_t i = 2; i + 2 < t.size(); ++i) {
+    const double h = t[i + 1] - t[i];
+    // 4th-order central difference of the mechanical energy.
+    auto e = [&](size_t k) { return ke[k] + pe[k]; };
+    const double de = (e(i - 2) - 8 * e(i - 1) + 8 * e(i + 1) - e(i + 2)) / (12 * h);
+    peak = std::max(peak, std::abs(tq[i]));
+    err = std::max(err, std::abs(de / w - tq[i]));
+  }
+  EXPECT_GT(peak, 1.0);
+  EXPECT_LT(err, 1e-4 * peak) << "peak torque " << peak;
+  // And the energy balance closes: T + V + dissipated − input stays constant.
+  const auto& bal = r.rec->data.at("energy.balance");
+  EXPECT_NEAR(bal.back(), bal.front(), 1e-8 * ke[0]);
+}
+
+TEST(Springs, MassOnSpringOscillatesAtItsNaturalFrequency) {
+  // A 2 kg slider on a frictionless guide, 800 N/m spring to the ground, pulled 10 mm:
+  // x(t) = x0 cos(√(k/m) t). And a torsional spring on a pivoted disc: φ = φ0 cos(√(k/I) t).
+  const std::string yaml = R"Y(
+bodies:
+  block: {mass: 2.0, inertia: 0.01, position: [0.11, 0]}
+  disc:  {mass: 1.0, inertia: 0.02, position: [0, 1], angle: 0.1}
+ground:
+  markers: {A: [0, 0], C: [0, 1]}
+joints:
+  guide: {type: translational, guide: ground.A, slider: block, axis: [1, 0]}
+  hinge: {type: revolute, journal: disc, bearing: ground.C}
+loads:
+  spring: {type: spring_damper, from: ground.A, to: block, stiffness: 800, free_length: 0.1}
+  coil: {type: torsional_spring_damper, bodies: [ground, disc], stiffness: 5.0, free_angle: 0}
+solver: {rtol: 1e-10, atol: 1e-13, end_time: 1.0, output_interval: 0.01, initial_state: given}
+)Y";
+  const SimRun r = run_text(yaml);
+  ASSERT_TRUE(r.result.status.ok) << r.result.status.message;
+  double ex = 0, ep = 0;
+  for (size_t i = 0; i < r.rec->time.size(); ++i) {
+    const double t = r.rec->time[i];
+    ex = std::max(ex, std::abs(r.rec->data.at("block.x")[i] - (0.1 + 0.01 * std::cos(20 * t))));
+    ep = std::max(ep, std::abs(r.rec->data.at("disc.phi")[i] - 0.1 * std::cos(std::sqrt(250.0) * t)));
+  }
+  EXPECT_LT(ex, 1e-9);
+  EXPECT_LT(ep, 1e-8);
+}
+
+TEST(Springs, DampingDissipatesAndTheBalanceCloses) {
+  const std::string yaml = R"Y(
+gravity: [0, -9.81]
+bodies:
+  bob: {mass: 1.0, inertia: 0.001, position: [0.3, -0.2]}
+ground:
+  markers: {O: [0, 0]}
+loads:
+  spring: {type: spring_damper, from: ground.O, to: bob, stiffness: 200, damping: 1.5, free_length: 0.25}
+solver: {rtol: 1e-10, atol: 1e-12, end_time: 2.0, output_interval: 0.005, initial_state: given}
+)Y";
+  const SimRun r = run_text(yaml);
+  ASSERT_TRUE(r.result.status.ok) << r.result.status.message;
+  const auto& diss = r.rec->data.at("energy.dissipated");
+  const auto& bal = r.rec->data.at("energy.balance");
+  for (size_t i = 1; i < diss.size(); ++i) ASSERT_GE(diss[i], diss[i - 1]);
+  EXPECT_GT(diss.back(), 0.5);  // most of the initial ~3 J elastic + gravity energy
+  double drift = 0;
+  for (double b : bal) drift = std::max(drift, std::abs(b - bal.front()));
+  EXPECT_LT(drift, 1e-7);
+}
+
+TEST(Drivers, TranslationalExpressionDriverForceIsMassTimesAcceleration) {
+  // A 3 kg carriage moved by step5(time, 0, 0, 0.085, 0.230) (seed 004's closing stroke).
+  const std::string yaml = R"Y(
+bodies:
+  carriage: {mass: 3.0, inertia: 0.1, position: [0, 0]}
+joints:
+  rail: {type: translational, guide: ground, slider: carriage, axis: [1, 0]}
+drivers:
+  stroke: {joint: rail, motion: "step5(time, 0, 0, 0.085, 0.230)"}
+solver: {end_time: 0.1, output_interval: 0.001}
+)Y";
+  const SimRun r = run_text(yaml);
+  ASSERT_TRUE(r.result.status.ok) << r.result.status.message;
+  double ex = 0, ef = 0;
+  for (size_t i = 0; i < r.rec->time.size(); ++i) {
+    const double t = r.rec->time[i], T = 0.085, s = std::min(t / T, 1.0);
+    const double x = 0.230 * s * s * s * (10 - 15 * s + 6 * s * s);
+    const double a = t < T ? 0.230 * (60 * s - 180 * s * s + 120 * s * s * s) / (T * T) : 0.0;
+    ex = std::max(ex, std::abs(r.rec->data.at("carriage.x")[i] - x));
+    ef = std::max(ef, std::abs(r.rec->data.at("stroke.force")[i] - 3.0 * a));
+  }
+  EXPECT_LT(ex, 1e-7);
+  EXPECT_LT(ef, 1e-3 * 3.0 * 0.230 * 5.77 / (0.085 * 0.085));  // 0.1% of the peak force
+}
+
+TEST(Assembly, RedundantConstraintsAreReported) {
+  const std::string yaml = R"Y(
+bodies:
+  b: {mass: 1, inertia: 1, markers: {P: [0, 0]}}
+joints:
+  j1: {type: revolute, journal: b.P, bearing: ground}
+  j2: {type: revolute, journal: b.P, bearing: ground}
+solver: {end_time: 0.1}
+)Y";
+  const Model m = load_model_text(yaml, "r.yaml").model;
+  Workspace ws(m);
+  try {
+    initial_state(m, ws);
+    FAIL() << "expected an error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("redundant"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Assembly, ImpossibleClosureIsReported) {
+  // A 0.1 m link cannot reach a point 1 m away.
+  const std::string yaml = R"Y(
+ground: {markers: {A: [0, 0], B: [1, 0]}}
+bodies:
+  link: {mass: 1, inertia: 1, position: [0.05, 0], markers: {L: [-0.05, 0], R: [0.05, 0]}}
+joints:
+  a: {type: revolute, journal: link.L, bearing: ground.A}
+  b: {type: revolute, journal: link.R, bearing: ground.B}
+solver: {end_time: 0.1}
+)Y";
+  const Model m = load_model_text(yaml, "c.yaml").model;
+  Workspace ws(m);
+  EXPECT_THROW(initial_state(m, ws), std::runtime_error);
+}
