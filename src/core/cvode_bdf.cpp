@@ -62,6 +62,7 @@ class CvodeBdf final : public Integrator {
       }
       initialised_ = true;
     } else {
+      accumulated_ = current();  // CVodeReInit zeroes CVODE's counters
       check(CVodeReInit(mem_, t, y_), "CVodeReInit");
     }
     t_ = t;
@@ -92,17 +93,21 @@ class CvodeBdf final : public Integrator {
     return {Advance::reached, t_ret, {}};
   }
 
-  IntegratorStats stats() const override {
+  IntegratorStats stats() const override { return current(); }
+
+ private:
+  /// Counters since the first reset: those before the last CVodeReInit plus CVODE's own.
+  IntegratorStats current() const {
     IntegratorStats s;
     long v = 0;
     CVodeGetNumSteps(mem_, &v);
-    s.steps = v;
+    s.steps = accumulated_.steps + v;
     CVodeGetNumErrTestFails(mem_, &v);
-    s.rejected_steps = v;
+    s.rejected_steps = accumulated_.rejected_steps + v;
     long fe = 0, fe_ls = 0;
     CVodeGetNumRhsEvals(mem_, &fe);
     CVodeGetNumLinRhsEvals(mem_, &fe_ls);
-    s.rhs_evaluations = fe + fe_ls;
+    s.rhs_evaluations = accumulated_.rhs_evaluations + fe + fe_ls;
     double h = 0;
     CVodeGetLastStep(mem_, &h);
     s.last_step = h;
@@ -110,7 +115,6 @@ class CvodeBdf final : public Integrator {
     return s;
   }
 
- private:
   static int rhs_cb(double t, N_Vector y, N_Vector ydot, void* data) {
     auto* self = static_cast<CvodeBdf*>(data);
     const bool ok = self->p_.rhs(t, N_VGetArrayPointer(y), N_VGetArrayPointer(ydot));
@@ -135,6 +139,7 @@ class CvodeBdf final : public Integrator {
   bool initialised_ = false;
   double t_ = 0.0;
   long events_ = 0;
+  IntegratorStats accumulated_;
   std::string last_error_;
 };
 

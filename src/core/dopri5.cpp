@@ -31,7 +31,7 @@ class Dopri5 final : public Integrator {
  public:
   Dopri5(OdeProblem p, IntegratorOptions o) : p_(std::move(p)), o_(o) {
     const int n = p_.n;
-    for (auto* v : {&y_, &k1_, &k2_, &k3_, &k4_, &k5_, &k6_, &k7_, &yt_, &ynew_, &r1_, &r2_,
+    for (auto* v : {&y_, &k1_prev_, &k1_, &k2_, &k3_, &k4_, &k5_, &k6_, &k7_, &yt_, &ynew_, &r1_, &r2_,
                     &r3_, &r4_, &r5_})
       v->resize(n);
     g_old_.resize(p_.n_events);
@@ -166,6 +166,7 @@ class Dopri5 final : public Integrator {
       h_step_ = h;
       t_ = t_ + h;
       y_ = ynew_;
+      k1_prev_ = k1_;
       k1_ = k7_;
       have_step_ = true;
       ++stats_.steps;
@@ -208,9 +209,51 @@ class Dopri5 final : public Integrator {
     }
     g_old_ = g_new_;
     if (std::isfinite(best)) {
+      redo_step_to(best);
       pending_event_ = true;
       t_event_ = best;
     }
+  }
+
+  /// Recomputes the accepted step so it ends at the located event t_e: stages past the crossing
+  /// already felt the new contact state and would bias the state read at the crossing (δ̇⁻).
+  void redo_step_to(double t_e) {
+    const double h = t_e - t_old_;
+    if (!(h > 0.0)) return;
+    y_ = r1_;
+    k1_ = k1_prev_;
+    bool ok = true;
+    yt_ = y_ + h * a21 * k1_;
+    ok = ok && f(t_old_ + c2 * h, yt_, k2_);
+    if (ok) { yt_ = y_ + h * (a31 * k1_ + a32 * k2_); ok = f(t_old_ + c3 * h, yt_, k3_); }
+    if (ok) { yt_ = y_ + h * (a41 * k1_ + a42 * k2_ + a43 * k3_); ok = f(t_old_ + c4 * h, yt_, k4_); }
+    if (ok) {
+      yt_ = y_ + h * (a51 * k1_ + a52 * k2_ + a53 * k3_ + a54 * k4_);
+      ok = f(t_old_ + c5 * h, yt_, k5_);
+    }
+    if (ok) {
+      yt_ = y_ + h * (a61 * k1_ + a62 * k2_ + a63 * k3_ + a64 * k4_ + a65 * k5_);
+      ok = f(t_old_ + h, yt_, k6_);
+    }
+    if (ok) {
+      ynew_ = y_ + h * (a71 * k1_ + a73 * k3_ + a74 * k4_ + a75 * k5_ + a76 * k6_);
+      ok = f(t_old_ + h, ynew_, k7_);
+    }
+    if (!ok) {  // keep the interpolated state of the original step
+      dense(t_e, ye_);
+      y_ = ye_;
+      t_ = t_e;
+      need_k1_ = true;
+      return;
+    }
+    r2_ = ynew_ - y_;
+    r3_ = h * k1_ - r2_;
+    r4_ = r2_ - h * k7_ - r3_;
+    r5_ = h * (d1 * k1_ + d3 * k3_ + d4 * k4_ + d5 * k5_ + d6 * k6_ + d7 * k7_);
+    h_step_ = h;
+    t_ = t_e;
+    y_ = ynew_;
+    k1_ = k7_;
   }
 
   double bracket(int k, double a, double ga, double b, double gb) {
@@ -241,7 +284,7 @@ class Dopri5 final : public Integrator {
   IntegratorStats stats_;
   double t_ = 0.0, t_old_ = 0.0, h_ = 0.0, h_step_ = 0.0, t_event_ = 0.0;
   bool have_step_ = false, need_k1_ = true, pending_event_ = false;
-  Eigen::VectorXd y_, k1_, k2_, k3_, k4_, k5_, k6_, k7_, yt_, ynew_, r1_, r2_, r3_, r4_, r5_, ye_;
+  Eigen::VectorXd y_, k1_prev_, k1_, k2_, k3_, k4_, k5_, k6_, k7_, yt_, ynew_, r1_, r2_, r3_, r4_, r5_, ye_;
   Eigen::VectorXd g_old_, g_new_, g_tmp_;
 };
 

@@ -44,7 +44,7 @@ RunResult simulate(const Model& model, Workspace& ws, Observer& observer) {
   const SolverSettings& s = model.solver;
   RunResult result;
   Eigen::VectorXd y = initial_state(model, ws);
-  Eigen::VectorXd ydot(ws.ny);
+  Eigen::VectorXd ydot(ws.ny), g_event(ws.nc);
 
   OdeProblem problem;
   problem.n = ws.ny;
@@ -97,18 +97,20 @@ RunResult simulate(const Model& model, Workspace& ws, Observer& observer) {
         break;
       }
       if (adv.kind == Advance::event) {
-        // Flip the mode of every joint whose gap changed sign; read δ̇⁻ at the crossing.
+        // The integrator located g_k = s_k δ_k rising through zero: flip every joint now on the
+        // far side (g_k ≥ 0); at round-off (δ = ±1e-17) trust the largest g_k. Read δ̇⁻ here.
+        event_functions(model, ws, y.data(), g_event.data());
+        int first = 0;
+        for (int c = 1; c < ws.nc; ++c)
+          if (g_event[c] > g_event[first]) first = c;
         for (int c = 0; c < ws.nc; ++c) {
+          if (!(g_event[c] >= 0.0 || c == first)) continue;
           double delta, delta_dot;
           clearance_gap(model, ws, c, y.data(), delta, delta_dot);
           ContactState& cs = ws.contact[c];
-          if (!cs.in_contact && delta > 0.0) {
-            cs = {true, delta_dot};
-            observer.event({adv.t, c, true, delta_dot}, ws);
-          } else if (cs.in_contact && delta < 0.0) {
-            cs.in_contact = false;
-            observer.event({adv.t, c, false, delta_dot}, ws);
-          }
+          cs.in_contact = !cs.in_contact;
+          if (cs.in_contact) cs.impact_velocity = delta_dot;
+          observer.event({adv.t, c, cs.in_contact, delta_dot}, ws);
         }
         integrator->reset(adv.t, y);
         continue;
