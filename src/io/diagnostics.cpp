@@ -37,11 +37,13 @@ int edit_distance(const std::string& a, const std::string& b) {
 }
 
 std::string closest_match(const std::string& word, const std::vector<std::string>& candidates) {
+  // Close enough to be a typo: at most a third of the word (at least one edit), and never a
+  // change of the whole word (no 'A' for 'C').
   std::string best;
-  int best_d = std::max<int>(2, static_cast<int>(word.size()) / 3) + 1;
+  int best_d = std::max<int>(1, static_cast<int>(word.size()) / 3) + 1;
   for (const auto& c : candidates) {
     const int d = edit_distance(word, c);
-    if (d < best_d) {
+    if (d < best_d && d < static_cast<int>(std::min(word.size(), c.size()))) {
       best_d = d;
       best = c;
     }

@@ -349,7 +349,6 @@ class Loader {
                               : "unknown joint type '" + type +
                                     "', expected one of: revolute, translational, fixed" +
                                     (near.empty() ? "" : " (did you mean '" + near + "'?)"));
-        Section(r_, kv.second, kv.first, element, {});  // still report its shape
         continue;
       }
       Section s(r_, kv.second, kv.first, element, keys);
@@ -415,6 +414,7 @@ class Loader {
     const auto clearance = c.number("clearance", " (m)", non_negative);
     const auto rj = c.number("journal_radius", " (m)", positive);
     const auto rb = c.number("bearing_radius", " (m)", positive);
+    if (c.has("clearance") && !clearance) return;  // already reported
     if (s.has("clearance") && clearance && *clearance == 0.0) return;  // clearance: 0 → ideal
     if (clearance && rj) {
       cl.clearance = *clearance;

@@ -1,0 +1,148 @@
+// The lash command as a user runs it: exit codes, messages, output files.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "test_support.hpp"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Result {
+  int code;
+  std::string out;
+};
+
+/// Runs `lash ARGS` with stdout and stderr captured together.
+Result run_lash(const std::string& args) {
+  const std::string cmd = std::string(LASH_BINARY) + " " + args + " 2>&1";
+  FILE* p = popen(cmd.c_str(), "r");
+  std::string out;
+  char buf[4096];
+  while (size_t n = fread(buf, 1, sizeof buf, p)) out.append(buf, n);
+  const int status = pclose(p);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
+}
+
+std::string example() { return lash::test::example_path("flores_slider_crank.yaml"); }
+
+fs::path temp_dir(const std::string& name) {
+  const fs::path d = fs::temp_directory_path() / ("lash_cli_" + name + "_" + std::to_string(getpid()));
+  fs::remove_all(d);
+  return d;
+}
+
+size_t line_count(const fs::path& p) {
+  std::ifstream in(p);
+  size_t n = 0;
+  for (std::string l; std::getline(in, l);) ++n;
+  return n;
+}
+
+}  // namespace
+
+TEST(Cli, HelpExplainsTheOptions) {
+  Result r = run_lash("--help");
+  EXPECT_EQ(r.code, 0);
+  EXPECT_NE(r.out.find("run"), std::string::npos);
+  EXPECT_NE(r.out.find("check"), std::string::npos);
+  r = run_lash("run --help");
+  EXPECT_EQ(r.code, 0);
+  for (const char* opt : {"--output", "--set", "--quiet"})
+    EXPECT_NE(r.out.find(opt), std::string::npos) << opt;
+}
+
+TEST(Cli, CheckAcceptsTheExamples) {
+  const Result r = run_lash("check " + example());
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("ok: 3 bodies, 4 joints (1 with clearance)"), std::string::npos) << r.out;
+}
+
+TEST(Cli, CheckListsProblemsWithFileLineColumnAndExitsTwo) {
+  const fs::path dir = temp_dir("check");
+  fs::create_directories(dir);
+  std::string text = lash::test::read_file(example());
+  text.replace(text.find("clearance: 0.5e-3"), 17, "clearance: -0.001");
+  text.replace(text.find("mass: 0.30"), 10, "mas: 0.30");
+  const fs::path bad = dir / "bad.yaml";
+  std::ofstream(bad) << text;
+  const Result r = run_lash("check " + bad.string());
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.out.find(bad.string() + ":22:5: body 'crank': unknown key 'mas', did you mean 'mass'?"),
+            std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("joint 'rod_slider': clearance must be >= 0, got -0.001"), std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find("problems found; nothing was run"), std::string::npos);
+  // run refuses the same model the same way and writes nothing.
+  const Result run = run_lash("run " + bad.string() + " -o " + (dir / "out").string());
+  EXPECT_EQ(run.code, 2);
+  EXPECT_FALSE(fs::exists(dir / "out"));
+  fs::remove_all(dir);
+}
+
+TEST(Cli, RunWritesTheResultFiles) {
+  const fs::path dir = temp_dir("run");
+  const Result r = run_lash("run " + example() + " -o " + dir.string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("2401 outputs"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("\r"), std::string::npos) << "no progress line when not on a terminal";
+  ASSERT_TRUE(fs::exists(dir / "timeseries.csv"));
+  EXPECT_EQ(line_count(dir / "timeseries.csv"), 2402u);  // header + 0..0.024 s every 1e-5 s
+  std::ifstream ts(dir / "timeseries.csv");
+  std::string header;
+  std::getline(ts, header);
+  for (const char* col : {"time,", "slider.x,", "slider.ax,", "rod_slider.Fn,", "rod_slider.ex,",
+                          "rod_slider.mode,", "crank.torque,", "crank_pivot.Fx,",
+                          "energy.kinetic,", "energy.dissipated,"})
+    EXPECT_NE(header.find(col), std::string::npos) << col;
+  EXPECT_GT(line_count(dir / "events.csv"), 10u);
+  const auto j = nlohmann::json::parse(std::ifstream(dir / "summary.json"));
+  EXPECT_TRUE(j["status"]["ok"].get<bool>());
+  EXPECT_GT(j["integrator"]["steps"].get<long>(), 100);
+  EXPECT_GT(j["integrator"]["rhs_evaluations"].get<long>(), j["integrator"]["steps"].get<long>());
+  EXPECT_GT(j["clearance_joints"]["rod_slider"]["impacts"].get<long>(), 5);
+  const double share = j["clearance_joints"]["rod_slider"]["contact_share"].get<double>();
+  EXPECT_GT(share, 0.0);
+  EXPECT_LT(share, 1.0);
+  // Impacts spike the slider acceleration beyond the ideal mechanism's −19 419 m/s².
+  EXPECT_LT(j["channels"]["slider.ax"]["min"].get<double>(), -19419);
+  EXPECT_LT(j["max_constraint_violation"].get<double>(), 1e-6);
+  EXPECT_EQ(j["model"]["name"], "flores_slider_crank");
+  fs::remove_all(dir);
+}
+
+TEST(Cli, SetOverridesReachTheRun) {
+  const fs::path dir = temp_dir("set");
+  const Result r = run_lash("run " + example() + " -q -o " + dir.string() +
+                        " --set joints.rod_slider.clearance=0.25e-3 --set drivers.crank.speed_rpm=3000"
+                        " --set solver.end_time=0.005");
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto j = nlohmann::json::parse(std::ifstream(dir / "summary.json"));
+  EXPECT_DOUBLE_EQ(j["clearance_joints"]["rod_slider"]["clearance"].get<double>(), 0.25e-3);
+  EXPECT_NEAR(j["channels"]["crank.omega"]["max"].get<double>(), 3000 * 2 * M_PI / 60, 1e-6);
+  EXPECT_EQ(j["model"]["overrides"].size(), 3u);
+  EXPECT_NE(lash::test::read_file((dir / "model_resolved.yaml").string()).find("0.25e-3"),
+            std::string::npos);
+  fs::remove_all(dir);
+}
+
+TEST(Cli, NumericalFailureKeepsResultsAndExitsOne) {
+  const fs::path dir = temp_dir("fail");
+  const Result r =
+      run_lash("run " + example() + " -o " + dir.string() + " --set clearance_defaults.stiffness=10");
+  EXPECT_EQ(r.code, 1) << r.out;
+  EXPECT_NE(r.out.find("simulation stopped at t = "), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("joint 'rod_slider'"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("through its bearing"), std::string::npos) << r.out;
+  EXPECT_GT(line_count(dir / "timeseries.csv"), 2u);
+  const auto j = nlohmann::json::parse(std::ifstream(dir / "summary.json"));
+  EXPECT_FALSE(j["status"]["ok"].get<bool>());
+  EXPECT_EQ(j["status"]["element"], "rod_slider");
+  fs::remove_all(dir);
+}

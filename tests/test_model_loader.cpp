@@ -1,0 +1,203 @@
+// The model loader: a catalogue of bad models, each message asserted with its line and column.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "io/model_loader.hpp"
+#include "test_support.hpp"
+
+using namespace lash;
+
+namespace {
+
+const char* kGood = R"Y(name: t
+gravity: [0, -9.81]
+ground:
+  markers: {O: [0, 0]}
+bodies:
+  crank:
+    mass: 0.3
+    inertia: 1.0e-4
+    position: [0.025, 0]
+    markers: {O: [-0.025, 0], A: [0.025, 0]}
+  rod:
+    mass: 0.21
+    inertia: 2.5e-4
+    position: [0.11, 0]
+    markers: {A: [-0.06, 0], B: [0.06, 0]}
+  slider: {mass: 0.14, inertia: 1.0e-4, position: [0.17, 0]}
+joints:
+  pivot: {type: revolute, journal: crank.O, bearing: ground.O}
+  pin: {type: revolute, journal: crank.A, bearing: rod.A}
+  gudgeon:
+    type: revolute
+    journal: rod.B
+    bearing: slider
+    clearance: 0.5e-3
+    journal_radius: 9.5e-3
+    material: {youngs_modulus: 207e9, poisson_ratio: 0.3}
+    normal_law: lankarani_nikravesh
+    restitution: 0.9
+  guide: {type: translational, guide: ground.O, slider: slider, axis: [1, 0]}
+drivers:
+  motor: {joint: pivot, speed_rpm: 5000}
+solver:
+  end_time: 0.024
+  output_interval: 1.0e-5
+)Y";
+
+/// Replaces the first occurrence of `from` in the good model.
+std::string with(const std::string& from, const std::string& to) {
+  std::string s = kGood;
+  const auto p = s.find(from);
+  EXPECT_NE(p, std::string::npos) << from;
+  return s.replace(p, from.size(), to);
+}
+
+std::vector<Diagnostic> problems(const std::string& yaml,
+                                 const std::vector<std::string>& overrides = {}) {
+  try {
+    load_model_text(yaml, "model.yaml", overrides);
+  } catch (const ModelError& e) {
+    return e.diagnostics();
+  }
+  return {};
+}
+
+}  // namespace
+
+TEST(ModelLoader, GoodModelLoadsInSIUnits) {
+  const Model m = load_model_text(kGood, "model.yaml").model;
+  ASSERT_EQ(m.bodies.size(), 3u);
+  ASSERT_EQ(m.joints.size(), 4u);
+  EXPECT_EQ(m.clearance_joint_count(), 1);
+  const Clearance& c = *m.joints[2].clearance;
+  EXPECT_DOUBLE_EQ(c.bearing_radius, 10e-3);
+  EXPECT_NEAR(c.contact.stiffness / 6.610e10, 1.0, 5e-4);
+  EXPECT_NEAR(m.drivers[0].speed, 523.599, 1e-3);  // rpm → rad/s
+  EXPECT_EQ(m.joints[2].a.body, 1);
+  EXPECT_EQ(m.joints[2].b.body, 2);
+}
+
+TEST(ModelLoader, NegativeClearanceNamesJointLineAndValue) {
+  const auto d = problems(with("clearance: 0.5e-3", "clearance: -0.001"));
+  ASSERT_EQ(d.size(), 1u);
+  EXPECT_EQ(d[0].str(), "model.yaml:24:16: joint 'gudgeon': clearance must be >= 0, got -0.001");
+}
+
+TEST(ModelLoader, UnknownKeySuggestsTheNearestOne) {
+  const auto d = problems(with("clearance: 0.5e-3", "clearence: 0.5e-3"));
+  ASSERT_GE(d.size(), 1u);
+  EXPECT_EQ(d[0].str(), "model.yaml:24:5: joint 'gudgeon': unknown key 'clearence', did you mean 'clearance'?");
+}
+
+TEST(ModelLoader, EveryProblemIsListedAtOnce) {
+  std::string s = with("mass: 0.3", "mass: heavy");
+  s.replace(s.find("bearing: rod.A"), 14, "bearing: rood.A");
+  s.replace(s.find("speed_rpm: 5000"), 15, "speed_rpm: 5000, speed: 3");
+  const auto d = problems(s);
+  ASSERT_EQ(d.size(), 3u);
+  EXPECT_EQ(d[0].str(), "model.yaml:7:11: body 'crank': 'mass' must be a number (kg), got 'heavy'");
+  EXPECT_EQ(d[1].str(),
+            "model.yaml:19:52: joint 'pin': unknown body 'rood' in 'rood.A', expected one of: "
+            "ground, crank, rod, slider (did you mean 'rod'?)");
+  EXPECT_EQ(d[2].line, 31);
+  EXPECT_NE(d[2].message.find("exactly one of speed_rpm, speed"), std::string::npos);
+}
+
+TEST(ModelLoader, UnknownMarkerListsTheBodysMarkers) {
+  const auto d = problems(with("journal: rod.B", "journal: rod.C"));
+  ASSERT_EQ(d.size(), 1u);
+  EXPECT_EQ(d[0].line, 22);
+  EXPECT_EQ(d[0].message, "unknown marker 'C' on body 'rod', expected one of: A, B");
+}
+
+TEST(ModelLoader, UnknownLawsAndTypes) {
+  auto d = problems(with("normal_law: lankarani_nikravesh", "normal_law: lankarani"));
+  ASSERT_EQ(d.size(), 1u) << d[0].str() << "\n" << d[1].str();
+  EXPECT_NE(d[0].message.find("unknown normal_law 'lankarani', expected one of: hertz, "
+                              "hunt_crossley, lankarani_nikravesh, flores, impact"),
+            std::string::npos);
+  d = problems(with("type: translational", "type: prismatc"));
+  ASSERT_EQ(d.size(), 1u);
+  EXPECT_EQ(d[0].str(), "model.yaml:29:17: joint 'guide': unknown joint type 'prismatc', expected "
+                        "one of: revolute, translational, fixed");
+}
+
+TEST(ModelLoader, MissingRequiredKeys) {
+  auto d = problems(with("    mass: 0.21\n", ""));
+  ASSERT_EQ(d.size(), 1u);
+  EXPECT_EQ(d[0].str(), "model.yaml:12:5: body 'rod': missing required key 'mass' (kg)");
+  d = problems(with("  end_time: 0.024\n", ""));
+  ASSERT_EQ(d.size(), 1u);
+  EXPECT_EQ(d[0].element, "solver");
+  EXPECT_NE(d[0].message.find("missing required key 'end_time'"), std::string::npos);
+}
+
+TEST(ModelLoader, ImpactLawNeedsItsDampingParameters) {
+  const auto d = problems(with("normal_law: lankarani_nikravesh", "normal_law: impact"));
+  ASSERT_EQ(d.size(), 2u);
+  EXPECT_NE(d[0].message.find("damping_max"), std::string::npos);
+  EXPECT_NE(d[1].message.find("damping_depth"), std::string::npos);
+}
+
+TEST(ModelLoader, BadExpressionIsReportedWhereItIsWritten) {
+  const auto d = problems(with("speed_rpm: 5000", "motion: \"step5(time, 0, 0, 0.085)\""));
+  ASSERT_EQ(d.size(), 1u);
+  EXPECT_EQ(d[0].line, 31);
+  EXPECT_NE(d[0].message.find("bad expression"), std::string::npos);
+}
+
+TEST(ModelLoader, InvalidYamlPointsAtTheSyntaxError) {
+  const auto d = problems("bodies:\n  a: {mass: 1\n");
+  ASSERT_EQ(d.size(), 1u);
+  EXPECT_EQ(d[0].file, "model.yaml");
+  EXPECT_GT(d[0].line, 0);
+  EXPECT_NE(d[0].message.find("not valid YAML"), std::string::npos);
+}
+
+TEST(ModelLoader, DriverOnAClearanceJointIsRejected) {
+  const auto d = problems(with("joint: pivot", "joint: gudgeon"));
+  ASSERT_EQ(d.size(), 1u);
+  EXPECT_NE(d[0].message.find("is a clearance joint"), std::string::npos);
+}
+
+TEST(Overrides, ChangeValuesAndSwitchJointsToClearance) {
+  auto m = load_model_text(kGood, "model.yaml",
+                           {"joints.gudgeon.clearance=0.25e-3", "drivers.motor.speed_rpm=3000",
+                            "joints.pin.clearance=1e-4", "joints.pin.journal_radius=5e-3",
+                            "joints.pin.stiffness=1e9", "joints.pin.normal_law=hertz"})
+               .model;
+  EXPECT_DOUBLE_EQ(m.joints[2].clearance->clearance, 0.25e-3);
+  EXPECT_NEAR(m.drivers[0].speed, 3000 * 2 * M_PI / 60, 1e-9);
+  ASSERT_TRUE(m.joints[1].clearance.has_value());
+  EXPECT_DOUBLE_EQ(m.joints[1].clearance->bearing_radius, 5.1e-3);
+  EXPECT_DOUBLE_EQ(m.joints[1].clearance->contact.stiffness, 1e9);
+  // A parent that does not exist is an error, not a silent new branch.
+  const auto d = problems(kGood, {"joints.pin.material.youngs_modulus=1e11"});
+  ASSERT_EQ(d.size(), 1u);
+  EXPECT_EQ(d[0].str(), "--set joints.pin.material.youngs_modulus: no 'joints.pin.material' in the model");
+}
+
+TEST(Overrides, ClearanceZeroMakesTheJointIdeal) {
+  const Model m = load_model_text(kGood, "model.yaml", {"joints.gudgeon.clearance=0"}).model;
+  EXPECT_EQ(m.clearance_joint_count(), 0);
+}
+
+TEST(Overrides, BadPathsAndValuesAreReported) {
+  auto d = problems(kGood, {"joints.gudgon.clearance=1e-4"});
+  ASSERT_EQ(d.size(), 1u);
+  EXPECT_EQ(d[0].str(), "--set joints.gudgon.clearance: no 'joints.gudgon' in the model, did you mean 'gudgeon'?");
+  d = problems(kGood, {"joints.gudgeon.clearance=abc"});
+  ASSERT_EQ(d.size(), 1u);
+  EXPECT_EQ(d[0].str(), "model.yaml: joint 'gudgeon': 'clearance' must be a number (m), got 'abc' (value set with --set)");
+  d = problems(kGood, {"no_equals_sign"});
+  ASSERT_EQ(d.size(), 1u);
+}
+
+TEST(ModelLoader, ExamplesLoad) {
+  for (const char* name : {"flores_slider_crank.yaml", "flores_slider_crank_ideal.yaml",
+                           "flores_slider_crank_crank_rod_clearance.yaml"}) {
+    EXPECT_NO_THROW(load_model_file(lash::test::example_path(name))) << name;
+  }
+}
