@@ -1,7 +1,25 @@
 // Rigid-body dynamics with ideal joints against closed forms and against itself.
+#include <atomic>
 #include <cmath>
+#include <cstdlib>
+#include <new>
 
 #include "test_support.hpp"
+
+// Counts heap allocations (malloc: Eigen's and operator new's) while `g_counting` is set, by
+// interposing glibc's malloc. Sanitizer builds keep their own allocator and skip the test.
+static std::atomic<bool> g_counting{false};
+static std::atomic<long> g_allocations{0};
+#if defined(__SANITIZE_ADDRESS__)
+constexpr bool kCountAllocations = false;
+#else
+constexpr bool kCountAllocations = true;
+extern "C" void* __libc_malloc(std::size_t);
+extern "C" void* malloc(std::size_t n) {
+  if (g_counting) ++g_allocations;
+  return __libc_malloc(n);
+}
+#endif
 
 using namespace lash;
 using namespace lash::test;
@@ -237,4 +255,28 @@ solver: {end_time: 0.1}
   const Model m = load_model_text(yaml, "c.yaml").model;
   Workspace ws(m);
   EXPECT_THROW(initial_state(m, ws), std::runtime_error);
+}
+
+TEST(RightHandSide, AllocatesNothing) {
+  if (!kCountAllocations) GTEST_SKIP() << "sanitizer build: malloc is the sanitizer's";
+  // The Flores example with one clearance joint in contact and one expression load.
+  std::string yaml = read_file(example_path("flores_slider_crank.yaml"));
+  yaml += "loads:\n  push: {type: force, point: slider.O, fx: \"-100*slider.vx\", fy: \"0\"}\n";
+  const Model m = load_model_text(yaml, "m.yaml").model;
+  Workspace ws(m);
+  Eigen::VectorXd y = initial_state(m, ws), ydot(ws.ny);
+  y[3 * 2] += 0.6e-3;  // push the slider so the journal penetrates its bearing
+  ws.contact[0] = {true, 1.0};
+  ASSERT_TRUE(evaluate(m, ws, 0.0, y.data(), ydot.data()));
+  ASSERT_GT(ws.clearance_out[0].f_n, 0.0);
+  g_allocations = 0;
+  g_counting = true;
+  for (int i = 0; i < 100; ++i) evaluate(m, ws, 1e-6 * i, y.data(), ydot.data());
+  g_counting = false;
+  EXPECT_EQ(g_allocations.load(), 0);
+  // The counter works: a vector allocates.
+  g_counting = true;
+  { std::vector<double> v(1000); }
+  g_counting = false;
+  EXPECT_GT(g_allocations.load(), 0);
 }

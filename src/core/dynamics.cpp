@@ -209,7 +209,9 @@ Workspace::Workspace(const Model& model) {
   gamma.resize(m);
   rhs_m.resize(m);
   lambda.resize(m);
+  rate_m.resize(m);
   phi_q.resize(m, nq);
+  phi_q_minv.resize(m, nq);
   w.resize(m, m);
   llt = Eigen::LLT<Eigen::MatrixXd>(m);
 }
@@ -351,7 +353,8 @@ bool evaluate(const Model& model, Workspace& ws, double t, const double* y, doub
     const double a = model.solver.baumgarte_alpha, b = model.solver.baumgarte_beta;
     ws.rhs_m.noalias() = ws.gamma - 2.0 * a * ws.phi_dot - b * b * ws.phi;
     ws.rhs_m.noalias() -= ws.phi_q * ws.qdd;
-    ws.w.noalias() = ws.phi_q * ws.minv.asDiagonal() * ws.phi_q.transpose();
+    ws.phi_q_minv.noalias() = ws.phi_q * ws.minv.asDiagonal();
+    ws.w.noalias() = ws.phi_q_minv * ws.phi_q.transpose();
     ws.llt.compute(ws.w);
     if (ws.llt.info() != Eigen::Success) return false;
     ws.lambda = ws.rhs_m;
@@ -360,7 +363,8 @@ bool evaluate(const Model& model, Workspace& ws, double t, const double* y, doub
     ws.qdd = ws.minv.cwiseProduct(ws.g);
     // Power of all constraint forces: the drivers' work (and Baumgarte's, ≈ 0).
     const Eigen::Map<const Eigen::VectorXd> qd(y + nq, nq);
-    ws.input_power += ws.lambda.dot(ws.phi_q * qd);
+    ws.rate_m.noalias() = ws.phi_q * qd;
+    ws.input_power += ws.lambda.dot(ws.rate_m);
     ws.constraint_violation = ws.phi.cwiseAbs().maxCoeff();
   } else {
     ws.constraint_violation = 0.0;

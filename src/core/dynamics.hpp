@@ -57,8 +57,8 @@ struct Workspace {
   bool loads_use_state = false;
 
   // Work arrays (sized once).
-  Eigen::VectorXd minv, g, phi, phi_dot, gamma, rhs_m, lambda, qdd;
-  Eigen::MatrixXd phi_q, w;
+  Eigen::VectorXd minv, g, phi, phi_dot, gamma, rhs_m, rate_m, lambda, qdd;
+  Eigen::MatrixXd phi_q, phi_q_minv, w;
   Eigen::LLT<Eigen::MatrixXd> llt;
 
   // Outputs of the last evaluate().
