@@ -201,3 +201,44 @@ TEST(ModelLoader, ExamplesLoad) {
     EXPECT_NO_THROW(load_model_file(lash::test::example_path(name))) << name;
   }
 }
+
+TEST(ModelLoader, NonFiniteNumbersAndBadNamesAreRejected) {
+  auto d = problems(with("gravity: [0, -9.81]", "gravity: [.nan, -9.81]"));
+  ASSERT_EQ(d.size(), 1u);
+  EXPECT_EQ(d[0].str(), "model.yaml:2:10: model: 'gravity' must be a pair of finite numbers [x, y] "
+                        "(m/s²), got [.nan, -9.81]");
+  d = problems(with("  slider: {mass", "  slider-1: {mass"));
+  ASSERT_GE(d.size(), 1u);
+  EXPECT_NE(d[0].message.find("a body name must be letters, digits and '_'"), std::string::npos);
+}
+
+TEST(ModelLoader, PrescribedMotionMustDependOnTimeOnly) {
+  const auto d = problems(with("speed_rpm: 5000", "motion: \"crank.phi + time\""));
+  ASSERT_EQ(d.size(), 1u);
+  EXPECT_NE(d[0].message.find("function of time only"), std::string::npos) << d[0].str();
+}
+
+TEST(ModelLoader, MissingSectionPointsIntoTheFileNotAtAnOverride) {
+  std::string s = kGood;
+  s = s.substr(0, s.find("solver:"));
+  const auto d = problems(s);
+  ASSERT_EQ(d.size(), 1u);
+  EXPECT_EQ(d[0].str(), "model.yaml:1:1: solver: missing required key 'end_time' (s)");
+}
+
+TEST(ModelLoader, JointGeometryAndMaterialOverrideTheDefaults) {
+  std::string s = with("joints:\n", R"Y(clearance_defaults:
+  journal_radius: 9.5e-3
+  journal_material: {youngs_modulus: 70e9, poisson_ratio: 0.33}
+  bearing_material: {youngs_modulus: 70e9, poisson_ratio: 0.33}
+joints:
+)Y");
+  s.replace(s.find("    journal_radius: 9.5e-3\n"), 27, "    bearing_radius: 20e-3\n");
+  const Model m = load_model_text(s, "model.yaml").model;
+  const Clearance& c = *m.joints[2].clearance;
+  EXPECT_DOUBLE_EQ(c.bearing_radius, 20e-3);  // the joint's clearance + bearing_radius
+  EXPECT_DOUBLE_EQ(c.journal_radius, 19.5e-3);
+  // The joint's steel `material` wins over the aluminium per-side defaults.
+  EXPECT_NEAR(c.contact.stiffness,
+              hertz_cylinder_stiffness(20e-3, 19.5e-3, 207e9, 0.3, 207e9, 0.3), 1.0);
+}

@@ -64,7 +64,7 @@ int main(int argc, char** argv) {
       ->check(CLI::ExistingFile);
   run->add_option("-o,--output", out_dir,
                   "Output folder for timeseries.csv, events.csv, summary.json "
-                  "(default: out/<model name>)");
+                  "(default: out/<model file name without extension>)");
   run->add_option("--set", overrides,
                   "Override a model value before validation, KEY.PATH=VALUE, repeatable; "
                   "e.g. --set joints.rod_slider.clearance=0.25e-3 "

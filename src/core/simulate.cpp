@@ -68,7 +68,8 @@ RunResult simulate(const Model& model, Workspace& ws, Observer& observer) {
   }
   integrator->reset(0.0, y);
 
-  const long n_out = static_cast<long>(std::floor(s.end_time / s.output_interval + 1e-9));
+  // Outputs every interval, and at end_time when it is not a multiple of the interval.
+  const long n_out = static_cast<long>(std::ceil(s.end_time / s.output_interval - 1e-9));
   auto emit = [&](double t) -> bool {
     const bool finite = evaluate(model, ws, t, y.data(), ydot.data());
     result.max_constraint_violation =

@@ -7,6 +7,7 @@
 #include <functional>
 #include <map>
 #include <optional>
+#include <regex>
 #include <sstream>
 
 #include "core/expression.hpp"
@@ -47,7 +48,8 @@ class Section {
   Section(Reporter& r, const YAML::Node& node, const YAML::Node& parent, std::string element,
           std::vector<std::string> allowed)
       : r_(r), node_(usable(node) ? node : YAML::Node(YAML::NodeType::Map)),
-        element_(std::move(element)), allowed_(std::move(allowed)) {
+        anchor_(has_position(node) ? node : parent), element_(std::move(element)),
+        allowed_(std::move(allowed)) {
     if (!node.IsDefined() || node.IsNull()) return;
     if (!node.IsMap()) {
       r_.error(node, element_, "expected a map of keys (key: value), got " + kind(node));
@@ -65,6 +67,13 @@ class Section {
   }
 
   static bool usable(const YAML::Node& n) { return n.IsDefined() && n.IsMap(); }
+  static bool has_position(const YAML::Node& n) { return n.IsDefined() && n.Mark().line >= 0; }
+  static std::string join_scalars(const YAML::Node& n) {
+    std::string out;
+    for (size_t i = 0; i < n.size(); ++i)
+      out += (i ? ", " : "") + (n[i].IsScalar() ? n[i].Scalar() : std::string("..."));
+    return out;
+  }
   static std::string kind(const YAML::Node& n) {
     if (n.IsScalar()) return "'" + n.Scalar() + "'";
     if (n.IsSequence()) return "a list";
@@ -100,7 +109,7 @@ class Section {
   double required_number(const std::string& key, const std::string& units,
                          const std::function<std::string(double)>& check, double fallback) {
     if (!has(key)) {
-      r_.error(node_, element_, "missing required key '" + key + "'" + units);
+      r_.error(anchor_, element_, "missing required key '" + key + "'" + units);
       return fallback;
     }
     return number(key, units, check).value_or(fallback);
@@ -119,8 +128,9 @@ class Section {
     const YAML::Node n = node_[key];
     double x, y;
     if (!n.IsSequence() || n.size() != 2 || !YAML::convert<double>::decode(n[0], x) ||
-        !YAML::convert<double>::decode(n[1], y)) {
-      r_.error(n, element_, "'" + key + "' must be a pair [x, y]" + units + ", got " + kind(n));
+        !YAML::convert<double>::decode(n[1], y) || !std::isfinite(x) || !std::isfinite(y)) {
+      r_.error(n, element_, "'" + key + "' must be a pair of finite numbers [x, y]" + units +
+                                ", got " + (n.IsSequence() ? "[" + join_scalars(n) + "]" : kind(n)));
       return std::nullopt;
     }
     return Vec2(x, y);
@@ -129,6 +139,7 @@ class Section {
  private:
   Reporter& r_;
   YAML::Node node_;
+  YAML::Node anchor_;  ///< where to point when a key is missing: the map, or its parent
   std::string element_;
   std::vector<std::string> allowed_;
 };
@@ -254,7 +265,8 @@ class Loader {
       double x, y;
       if (!kv.second.IsSequence() || kv.second.size() != 2 ||
           !YAML::convert<double>::decode(kv.second[0], x) ||
-          !YAML::convert<double>::decode(kv.second[1], y)) {
+          !YAML::convert<double>::decode(kv.second[1], y) || !std::isfinite(x) ||
+          !std::isfinite(y)) {
         r_.error(kv.second, s.element(),
                  "marker '" + mk.name + "' must be [x, y] in body coordinates (m), got " +
                      Section::kind(kv.second));
@@ -285,6 +297,10 @@ class Loader {
                 {"mass", "inertia", "position", "angle", "angle_deg", "velocity",
                  "angular_velocity", "markers"});
       if (name == "ground") r_.error(kv.first, s.element(), "'ground' is reserved; rename the body");
+      if (!std::regex_match(name, std::regex("[A-Za-z_][A-Za-z0-9_]*")))
+        r_.error(kv.first, s.element(),
+                 "a body name must be letters, digits and '_', starting with a letter or '_' "
+                 "(it is used in expressions as <body>.x), got '" + name + "'");
       Body b;
       b.name = name;
       b.mass = s.required_number("mass", " (kg)", positive, 1.0);
@@ -391,8 +407,8 @@ class Loader {
     double e = 0, nu = 0;
   };
   std::optional<Material> material(Section& j, const std::string& key) {
-    const YAML::Node n = param(j, key);
-    if (!n.IsDefined() || n.IsNull()) return std::nullopt;
+    if (!j.has(key)) return std::nullopt;  // `j` is the joint merged with its defaults
+    const YAML::Node n = j.get(key);
     Section s(r_, n, j.node(), j.element() + " " + key, {"youngs_modulus", "poisson_ratio"});
     Material mat;
     mat.e = s.required_number("youngs_modulus", " (Pa)", positive, 207e9);
@@ -409,6 +425,15 @@ class Loader {
       const YAML::Node v = param(s, k);
       if (v.IsDefined()) merged[k] = v;
     }
+    // Geometry: when the joint itself gives two of the three, the defaults do not take part.
+    const int own_geometry = s.has("clearance") + s.has("journal_radius") + s.has("bearing_radius");
+    if (own_geometry >= 2)
+      for (const char* k : {"clearance", "journal_radius", "bearing_radius"})
+        if (!s.has(k)) merged.remove(k);
+    // Materials: the joint's own `material` beats per-side materials from the defaults.
+    if (s.has("material"))
+      for (const char* k : {"journal_material", "bearing_material"})
+        if (!s.has(k)) merged.remove(k);
     Section c(r_, merged, s.node(), s.element(), kClearanceKeys);
     Clearance cl;
     const auto clearance = c.number("clearance", " (m)", non_negative);
@@ -462,9 +487,9 @@ class Loader {
     if (auto k = c.number("stiffness", " (N/m^exponent)", positive)) {
       cl.contact.stiffness = *k;
     } else if (!c.has("stiffness")) {
-      auto common = material(s, "material");
-      auto mj = material(s, "journal_material");
-      auto mb = material(s, "bearing_material");
+      auto common = material(c, "material");
+      auto mj = material(c, "journal_material");
+      auto mb = material(c, "bearing_material");
       if (!mj) mj = common;
       if (!mb) mb = common;
       if (!mj || !mb) {
@@ -587,7 +612,9 @@ class Loader {
       if (auto ex = s.text("motion")) {
         d.profile = DriverProfile::expression;
         d.expression = *ex;
-        const std::string err = check_expression(*ex, body_names_);
+        std::string err = check_expression(*ex, {});
+        if (!err.empty() && check_expression(*ex, body_names_).empty())
+          err = "a prescribed motion must be a function of time only";
         if (!err.empty()) r_.error(s.get("motion"), s.element(), "bad expression: " + err);
       }
       // Initial coordinate: from the initial poses unless given.
