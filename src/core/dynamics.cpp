@@ -213,7 +213,9 @@ Workspace::Workspace(const Model& model) {
   phi_q.resize(m, nq);
   phi_q_minv.resize(m, nq);
   w.resize(m, m);
-  llt = Eigen::LLT<Eigen::MatrixXd>(m);
+  // Factor once so the factorisation's storage exists before the first right-hand side.
+  w.setIdentity();
+  llt.compute(w);
 }
 
 void driver_motion(const Model& model, Workspace& ws, int d, double t, double& f, double& fd,
