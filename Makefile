@@ -29,3 +29,7 @@ bench: build
 
 clean:
 	rm -rf $(BUILD) build-sanitize build-fuzz out
+
+# libFuzzer on the model loader (clang, ASan/UBSan) in build-fuzz/; LASH_FUZZ_SECONDS=300 for longer.
+fuzz: deps
+	LASH_FUZZ_JOBS=$(JOBS) bash scripts/fuzz-smoke.sh

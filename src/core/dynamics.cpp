@@ -9,12 +9,7 @@ namespace lash {
 
 namespace {
 
-/// Pose and velocity of one body (the ground: all zero, A = I).
-struct Kin {
-  Vec2 r = Vec2::Zero(), v = Vec2::Zero();
-  double phi = 0.0, omega = 0.0;
-  Eigen::Matrix2d A = Eigen::Matrix2d::Identity();
-};
+using Kin = BodyKin;
 
 Kin body_kin(int b, int nq, const double* y) {
   Kin k;
@@ -25,6 +20,17 @@ Kin body_kin(int b, int nq, const double* y) {
   k.omega = y[nq + 3 * b + 2];
   k.A = rotation(k.phi);
   return k;
+}
+
+/// Fills ws.kin from y (one sine and cosine per body per evaluation).
+void update_kin(Workspace& ws, const double* y) {
+  for (int b = 0; b < ws.nb; ++b) ws.kin[b] = body_kin(b, ws.nq, y);
+}
+
+/// The cached kinematics of body b (the ground for kGround).
+inline const Kin& kin_of(const Workspace& ws, int b) {
+  static const Kin ground;
+  return b == kGround ? ground : ws.kin[b];
 }
 
 /// A point of a body: world offset from the centre of mass, position and velocity.
@@ -55,19 +61,18 @@ inline void apply(Eigen::VectorXd& g, int body, const Vec2& s, const Vec2& f) {
   g[3 * body + 2] += cross(s, f);
 }
 
-/// Constraint rows for `model` at (t, y). Rows follow ws.row_of_joint / ws.row_of_driver; with
+/// Constraint rows for `model` at (t, y); ws.kin must hold y's kinematics. Rows follow ws.row_of_joint / ws.row_of_driver; with
 /// close_clearance the clearance joints' revolute rows follow after them (initial assembly).
 /// phi_dot and gamma may be null.
 void build_constraints(const Model& model, Workspace& ws, double t, const double* y,
                        bool close_clearance, Eigen::VectorXd& phi, Eigen::MatrixXd& phi_q,
                        Eigen::VectorXd* phi_dot, Eigen::VectorXd* gamma) {
-  const int nq = ws.nq;
   phi_q.setZero();
   int extra_row = ws.m;
 
   // Revolute rows: Φ = r_a − r_b (journal point minus bearing point).
   auto revolute = [&](const Joint& j, int row) {
-    const Kin ka = body_kin(j.a.body, nq, y), kb = body_kin(j.b.body, nq, y);
+    const Kin &ka = kin_of(ws, j.a.body), &kb = kin_of(ws, j.b.body);
     const PointKin pa = point_kin(ka, j.a.s), pb = point_kin(kb, j.b.s);
     phi.segment<2>(row) = pa.r - pb.r;
     const Vec2 ps_a = perp(pa.s), ps_b = perp(pb.s);
@@ -82,7 +87,7 @@ void build_constraints(const Model& model, Workspace& ws, double t, const double
   // Relative-angle row: Φ = φ_b − φ_a − angle0 − f.
   auto angle = [&](int body_a, int body_b, double angle0, double f, double fd, double fdd,
                    int row) {
-    const Kin ka = body_kin(body_a, nq, y), kb = body_kin(body_b, nq, y);
+    const Kin &ka = kin_of(ws, body_a), &kb = kin_of(ws, body_b);
     phi[row] = kb.phi - ka.phi - angle0 - f;
     put(phi_q, row, body_a, 0, 0, -1);
     put(phi_q, row, body_b, 0, 0, 1);
@@ -92,7 +97,7 @@ void build_constraints(const Model& model, Workspace& ws, double t, const double
   // Dot row: Φ = (A_a v')·(r_Pb − r_Pa) − f, v' fixed in body a.
   auto dot_row = [&](const Joint& j, const Vec2& v_body, double f, double fd, double fdd,
                      int row) {
-    const Kin ka = body_kin(j.a.body, nq, y), kb = body_kin(j.b.body, nq, y);
+    const Kin &ka = kin_of(ws, j.a.body), &kb = kin_of(ws, j.b.body);
     const PointKin pa = point_kin(ka, j.a.s), pb = point_kin(kb, j.b.s);
     const Vec2 v = ka.A * v_body, pv = perp(v);
     const Vec2 d = pb.r - pa.r, dd = pb.v - pa.v;
@@ -142,6 +147,35 @@ void build_constraints(const Model& model, Workspace& ws, double t, const double
   }
 }
 
+/// Solves W x = b for symmetric positive definite W given by its lower triangle, factoring W in
+/// place (W = L Lᵀ). Returns false if W is not positive definite (redundant constraints).
+bool cholesky_solve(Eigen::MatrixXd& w, const Eigen::VectorXd& b, Eigen::VectorXd& x) {
+  const int n = static_cast<int>(w.rows());
+  for (int j = 0; j < n; ++j) {
+    double d = w(j, j);
+    for (int k = 0; k < j; ++k) d -= w(j, k) * w(j, k);
+    if (!(d > 0.0)) return false;
+    d = std::sqrt(d);
+    w(j, j) = d;
+    for (int i = j + 1; i < n; ++i) {
+      double v = w(i, j);
+      for (int k = 0; k < j; ++k) v -= w(i, k) * w(j, k);
+      w(i, j) = v / d;
+    }
+  }
+  for (int i = 0; i < n; ++i) {  // L z = b
+    double v = b[i];
+    for (int k = 0; k < i; ++k) v -= w(i, k) * x[k];
+    x[i] = v / w(i, i);
+  }
+  for (int i = n - 1; i >= 0; --i) {  // Lᵀ x = z
+    double v = x[i];
+    for (int k = i + 1; k < n; ++k) v -= w(k, i) * x[k];
+    x[i] = v / w(i, i);
+  }
+  return true;
+}
+
 void load_body_state(Workspace& ws, const double* y) {
   for (int b = 0; b < ws.nb; ++b)
     for (int f = 0; f < 3; ++f) {
@@ -173,6 +207,18 @@ Workspace::Workspace(const Model& model) {
     m += j.type == JointType::fixed ? 3 : 2;
   }
   for (size_t di = 0; di < model.drivers.size(); ++di) row_of_driver.push_back(m++);
+  row_bodies.assign(m, {-1, -1});
+  for (size_t ji = 0; ji < model.joints.size(); ++ji) {
+    const Joint& j = model.joints[ji];
+    if (row_of_joint[ji] < 0) continue;
+    const int rows = j.type == JointType::fixed ? 3 : 2;
+    for (int r = 0; r < rows; ++r) row_bodies[row_of_joint[ji] + r] = {j.a.body, j.b.body};
+  }
+  for (size_t di = 0; di < model.drivers.size(); ++di) {
+    const Joint& j = model.joints[model.drivers[di].joint];
+    row_bodies[row_of_driver[di]] = {j.a.body, j.b.body};
+  }
+  kin.assign(nb, BodyKin{});
   nc = static_cast<int>(clearance_joints.size());
   contact.assign(nc, ContactState{});
   clearance_out.assign(nc, ClearanceOutput{});
@@ -213,9 +259,6 @@ Workspace::Workspace(const Model& model) {
   phi_q.resize(m, nq);
   phi_q_minv.resize(m, nq);
   w.resize(m, m);
-  // Factor once so the factorisation's storage exists before the first right-hand side.
-  w.setIdentity();
-  llt.compute(w);
 }
 
 void driver_motion(const Model& model, Workspace& ws, int d, double t, double& f, double& fd,
@@ -253,6 +296,7 @@ void event_functions(const Model& model, const Workspace& ws, const double* y, d
 bool evaluate(const Model& model, Workspace& ws, double t, const double* y, double* ydot) {
   ++ws.rhs_evaluations;
   const int nq = ws.nq;
+  update_kin(ws, y);
   ws.vars.time = t;
   if (ws.loads_use_state) load_body_state(ws, y);
 
@@ -272,7 +316,7 @@ bool evaluate(const Model& model, Workspace& ws, double t, const double* y, doub
     const Load& l = model.loads[li];
     switch (l.type) {
       case LoadType::force: {
-        const PointKin p = point_kin(body_kin(l.a.body, nq, y), l.a.s);
+        const PointKin p = point_kin(kin_of(ws, l.a.body), l.a.s);
         const Vec2 f(ws.load_expr[li][0].eval(), ws.load_expr[li][1].eval());
         apply(ws.g, l.a.body, p.s, f);
         ws.input_power += f.dot(p.v);
@@ -287,8 +331,8 @@ bool evaluate(const Model& model, Workspace& ws, double t, const double* y, doub
         break;
       }
       case LoadType::spring_damper: {
-        const PointKin pa = point_kin(body_kin(l.a.body, nq, y), l.a.s);
-        const PointKin pb = point_kin(body_kin(l.b.body, nq, y), l.b.s);
+        const PointKin pa = point_kin(kin_of(ws, l.a.body), l.a.s);
+        const PointKin pb = point_kin(kin_of(ws, l.b.body), l.b.s);
         const Vec2 d = pb.r - pa.r;
         const double len = d.norm();
         const Vec2 u = len > 0.0 ? Vec2(d / len) : Vec2::UnitX();
@@ -301,7 +345,7 @@ bool evaluate(const Model& model, Workspace& ws, double t, const double* y, doub
         break;
       }
       case LoadType::torsional_spring_damper: {
-        const Kin ka = body_kin(l.body_a, nq, y), kb = body_kin(l.body_b, nq, y);
+        const Kin &ka = kin_of(ws, l.body_a), &kb = kin_of(ws, l.body_b);
         const double theta = kb.phi - ka.phi - l.angle0, theta_dot = kb.omega - ka.omega;
         const double torque = l.stiffness * theta + l.damping * theta_dot;
         if (l.body_a != kGround) ws.g[3 * l.body_a + 2] += torque;
@@ -317,7 +361,7 @@ bool evaluate(const Model& model, Workspace& ws, double t, const double* y, doub
   for (int k = 0; k < ws.nc; ++k) {
     const Joint& j = model.joints[ws.clearance_joints[k]];
     const Clearance& cl = *j.clearance;
-    const Kin kj = body_kin(j.a.body, nq, y), kb = body_kin(j.b.body, nq, y);
+    const Kin &kj = kin_of(ws, j.a.body), &kb = kin_of(ws, j.b.body);
     const PointKin pj = point_kin(kj, j.a.s), pb = point_kin(kb, j.b.s);
     ClearanceOutput& out = ws.clearance_out[k];
     out.e = pj.r - pb.r;
@@ -337,7 +381,7 @@ bool evaluate(const Model& model, Workspace& ws, double t, const double* y, doub
     out.f_n = normal_force(cl.normal_law, out.delta, out.delta_dot, v_impact, cl.contact);
     out.f_t = friction_force(cl.friction_law, out.v_t, out.f_n, cl.friction);
     out.potential = contact_potential(out.delta, cl.contact);
-    const double elastic = cl.contact.stiffness * std::pow(out.delta, cl.contact.exponent);
+    const double elastic = hertz(out.delta, cl.contact);
     out.dissipation = (out.f_n - elastic) * out.delta_dot - out.f_t * out.v_t;
     // Normal force through the centres; friction at each body's contact point.
     apply(ws.g, j.a.body, pj.s, -out.f_n * n);
@@ -353,19 +397,39 @@ bool evaluate(const Model& model, Workspace& ws, double t, const double* y, doub
   if (ws.m > 0) {
     build_constraints(model, ws, t, y, false, ws.phi, ws.phi_q, &ws.phi_dot, &ws.gamma);
     const double a = model.solver.baumgarte_alpha, b = model.solver.baumgarte_beta;
-    ws.rhs_m.noalias() = ws.gamma - 2.0 * a * ws.phi_dot - b * b * ws.phi;
-    ws.rhs_m.noalias() -= ws.phi_q * ws.qdd;
-    ws.phi_q_minv.noalias() = ws.phi_q * ws.minv.asDiagonal();
-    ws.w.noalias() = ws.phi_q_minv * ws.phi_q.transpose();
-    ws.llt.compute(ws.w);
-    if (ws.llt.info() != Eigen::Success) return false;
-    ws.lambda = ws.rhs_m;
-    ws.llt.solveInPlace(ws.lambda);
-    ws.g.noalias() += ws.phi_q.transpose() * ws.lambda;
+    // rhs = γ − 2αΦ̇ − β²Φ − Φ_q M⁻¹ g, and W = Φ_q M⁻¹ Φ_qᵀ, from the row structure (each row
+    // touches at most two bodies), then W λ = rhs by an in-place Cholesky factorisation.
+    const int m = ws.m;
+    const Eigen::Map<const Eigen::VectorXd> qd(y + nq, nq);
+    for (int i = 0; i < m; ++i) {
+      double pq = 0.0, rate = 0.0;
+      for (int bi : ws.row_bodies[i]) {
+        if (bi < 0) continue;
+        for (int k = 3 * bi; k < 3 * bi + 3; ++k) {
+          pq += ws.phi_q(i, k) * ws.qdd[k];
+          rate += ws.phi_q(i, k) * qd[k];
+        }
+      }
+      ws.rhs_m[i] = ws.gamma[i] - 2.0 * a * ws.phi_dot[i] - b * b * ws.phi[i] - pq;
+      ws.rate_m[i] = rate;
+      for (int j = 0; j <= i; ++j) {
+        double sum = 0.0;
+        for (int bi : ws.row_bodies[i]) {
+          if (bi < 0 || (bi != ws.row_bodies[j][0] && bi != ws.row_bodies[j][1])) continue;
+          for (int k = 3 * bi; k < 3 * bi + 3; ++k)
+            sum += ws.phi_q(i, k) * ws.minv[k] * ws.phi_q(j, k);
+        }
+        ws.w(i, j) = sum;
+      }
+    }
+    if (!cholesky_solve(ws.w, ws.rhs_m, ws.lambda)) return false;
+    for (int i = 0; i < m; ++i)
+      for (int bi : ws.row_bodies[i]) {
+        if (bi < 0) continue;
+        for (int k = 3 * bi; k < 3 * bi + 3; ++k) ws.g[k] += ws.phi_q(i, k) * ws.lambda[i];
+      }
     ws.qdd = ws.minv.cwiseProduct(ws.g);
     // Power of all constraint forces: the drivers' work (and Baumgarte's, ≈ 0).
-    const Eigen::Map<const Eigen::VectorXd> qd(y + nq, nq);
-    ws.rate_m.noalias() = ws.phi_q * qd;
     ws.input_power += ws.lambda.dot(ws.rate_m);
     ws.constraint_violation = ws.phi.cwiseAbs().maxCoeff();
   } else {
@@ -383,6 +447,7 @@ bool evaluate(const Model& model, Workspace& ws, double t, const double* y, doub
 
 double constraint_residual(const Model& model, Workspace& ws, double t, const double* y) {
   if (ws.m == 0) return 0.0;
+  update_kin(ws, y);
   build_constraints(model, ws, t, y, false, ws.phi, ws.phi_q, nullptr, nullptr);
   return ws.phi.cwiseAbs().maxCoeff();
 }
@@ -408,6 +473,7 @@ Eigen::VectorXd initial_state(const Model& model, Workspace& ws) {
   // Positions: Gauss–Newton with minimum-norm corrections.
   double residual = 0.0;
   for (int it = 0; it < 100; ++it) {
+    update_kin(ws, y.data());
     build_constraints(model, ws, 0.0, y.data(), ideal, phi, phi_q, nullptr, nullptr);
     residual = phi.cwiseAbs().maxCoeff();
     if (residual < 1e-13) break;
@@ -421,6 +487,7 @@ Eigen::VectorXd initial_state(const Model& model, Workspace& ws) {
                              "); check the markers and initial positions");
 
   // Velocities: Φ_q q̇ = −Φ_t, least-squares correction of the initial guess.
+  update_kin(ws, y.data());
   build_constraints(model, ws, 0.0, y.data(), ideal, phi, phi_q, &phi_dot, nullptr);
   Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(phi_q);
   y.segment(nq, nq) -= cod.solve(phi_dot);
@@ -429,6 +496,7 @@ Eigen::VectorXd initial_state(const Model& model, Workspace& ws) {
   if (ws.m > 0) {
     Eigen::VectorXd p(ws.m);
     Eigen::MatrixXd pq(ws.m, nq);
+    update_kin(ws, y.data());
     build_constraints(model, ws, 0.0, y.data(), false, p, pq, nullptr, nullptr);
     Eigen::FullPivLU<Eigen::MatrixXd> lu(pq);
     if (lu.rank() < ws.m)

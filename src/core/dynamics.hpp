@@ -3,11 +3,12 @@
 /// Equations of motion in planar body coordinates (seed 001; Nikravesh):
 ///   M q̈ = g(q, q̇, t) + Φ_qᵀ λ,   Φ_q q̈ = γ − 2αΦ̇ − β²Φ  (Baumgarte),
 /// q = [x, y, φ] per body. M is diagonal, so λ comes from the m×m Schur complement
-/// (Φ_q M⁻¹ Φ_qᵀ) λ = γ_B − Φ_q M⁻¹ g, factored by Cholesky. Clearance joints add no
+/// (Φ_q M⁻¹ Φ_qᵀ) λ = γ_B − Φ_q M⁻¹ g, assembled from the sparse row structure and factored by
+/// Cholesky. Clearance joints add no
 /// constraint; they add contact forces to g. The ODE state is
 ///   y = [q (3nb), q̇ (3nb), E_dissipated, W_input].
-#include <Eigen/Cholesky>
 #include <Eigen/Core>
+#include <array>
 #include <string>
 #include <vector>
 
@@ -29,6 +30,13 @@ struct ClearanceOutput {
   double dissipation = 0.0;    ///< dissipated power, W (≥ 0)
 };
 
+/// Pose and velocity of one body at the current evaluation (the ground: all zero, A = I).
+struct BodyKin {
+  Vec2 r = Vec2::Zero(), v = Vec2::Zero();
+  double phi = 0.0, omega = 0.0;
+  Eigen::Matrix2d A = Eigen::Matrix2d::Identity();
+};
+
 /// Discrete state of a clearance joint: changed only at located events.
 struct ContactState {
   bool in_contact = false;
@@ -47,6 +55,10 @@ struct Workspace {
   int nc = 0;   ///< clearance joints
   std::vector<int> row_of_joint;   ///< first constraint row of each joint (−1: clearance joint)
   std::vector<int> row_of_driver;  ///< constraint row of each driver
+  /// The (at most two) bodies each constraint row touches, −1 for none/ground: Φ_q is sparse and
+  /// the Schur complement is assembled from this structure.
+  std::vector<std::array<int, 2>> row_bodies;
+  std::vector<BodyKin> kin;        ///< per body, filled at the start of each evaluation
   std::vector<int> clearance_joints;  ///< joint indices of clearance joints
   std::vector<ContactState> contact;  ///< per clearance joint
 
@@ -59,7 +71,6 @@ struct Workspace {
   // Work arrays (sized once).
   Eigen::VectorXd minv, g, phi, phi_dot, gamma, rhs_m, rate_m, lambda, qdd;
   Eigen::MatrixXd phi_q, phi_q_minv, w;
-  Eigen::LLT<Eigen::MatrixXd> llt;
 
   // Outputs of the last evaluate().
   std::vector<ClearanceOutput> clearance_out;

@@ -741,7 +741,10 @@ class Loader {
     st.end_time = s.required_number("end_time", " (s)", positive, 1.0);
     st.output_interval = s.number("output_interval", " (s)", positive).value_or(st.end_time / 1000);
     st.max_step = s.number("max_step", " (s)", non_negative).value_or(0.0);
-    if (auto ms = s.number("max_steps", "", positive)) st.max_steps = static_cast<long>(*ms);
+    if (auto ms = s.number("max_steps", "", [](double v) {
+          return v >= 1 && v <= 1e15 && v == std::floor(v) ? "" : "a whole number in [1, 1e15]";
+        }))
+      st.max_steps = static_cast<long>(*ms);
     if (auto rule = s.text("initial_state")) {
       if (*rule == "ideal") st.initial_state = InitialStateRule::ideal;
       else if (*rule == "given") st.initial_state = InitialStateRule::given;
@@ -779,6 +782,10 @@ void apply_override(YAML::Node root, const std::string& spec, Reporter& r) {
   std::vector<std::string> keys;
   std::stringstream ss(path);
   for (std::string k; std::getline(ss, k, '.');) keys.push_back(k);
+  if (path.back() == '.' || std::find(keys.begin(), keys.end(), "") != keys.end()) {
+    r.list.push_back({"--set", 0, 0, "", "empty key in '" + path + "', expected KEY.PATH=VALUE"});
+    return;
+  }
   YAML::Node node = root;
   std::string walked;
   for (size_t i = 0; i + 1 < keys.size(); ++i) {

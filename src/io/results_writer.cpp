@@ -105,15 +105,18 @@ ResultsWriter::~ResultsWriter() {
 
 void ResultsWriter::output(double t, const Eigen::VectorXd& y, const Workspace& ws) {
   channel_values(model_, ws, y, values_);
-  fmt::print(ts_, "{:.9g}", t);
+  // One buffered row, one write.
+  row_.clear();
+  fmt::format_to(std::back_inserter(row_), "{:.9g}", t);
   for (size_t i = 0; i < values_.size(); ++i) {
     const double v = values_[i];
-    fmt::print(ts_, ",{:.9g}", v);
+    fmt::format_to(std::back_inserter(row_), ",{:.9g}", v);
     Peak& p = peaks_[i];
     if (rows_ == 0 || v < p.min) p.min = v, p.t_min = t;
     if (rows_ == 0 || v > p.max) p.max = v, p.t_max = t;
   }
-  std::fputc('\n', ts_);
+  row_.push_back('\n');
+  std::fwrite(row_.data(), 1, row_.size(), ts_);
   if (rows_ == 0) {
     t_first_ = t;
     for (int k = 0; k < ws.nc; ++k)

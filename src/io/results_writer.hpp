@@ -4,6 +4,8 @@
 /// `<element>.<quantity>`), events.csv (contact onsets and separations) and summary.json
 /// (per-channel peaks, per-joint contact statistics, integrator statistics, model and settings).
 /// Rows are flushed as they come, so a failed run keeps everything written before the failure.
+#include <fmt/format.h>
+
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -47,6 +49,7 @@ class ResultsWriter : public Observer {
   std::FILE* ev_ = nullptr;
   std::vector<std::string> names_;
   std::vector<double> values_;
+  fmt::memory_buffer row_;
   std::vector<Peak> peaks_;
   std::vector<JointStats> joints_;
   long rows_ = 0;
