@@ -108,7 +108,7 @@ TEST(SliderCrank, IdealKinematicsMatchClosedForm) {
     ex = std::max(ex, std::abs(r.rec->data.at("slider.x")[i] - sc.x(t)));
     ea = std::max(ea, std::abs(r.rec->data.at("slider.ax")[i] - sc.ax(t)));
   }
-  // Default tolerances (rtol 1e-6, atol 1e-9): errors well inside rtol relative to the stroke.
+  // The example's tolerances (rtol 1e-8, atol 1e-11): errors well inside the tolerance.
   EXPECT_LT(ex, 2e-7);   // m, of x ~0.17 m
   EXPECT_LT(ea, 0.05);   // m/s², of peaks ~2e4
   // mechanisms.md hand-calculated check values.
