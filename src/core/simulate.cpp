@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 namespace lash {
@@ -39,88 +40,150 @@ bool journal_through_bearing(const Model& model, const Workspace& ws, RunStatus&
 
 }  // namespace
 
-RunResult simulate(const Model& model, Workspace& ws, Observer& observer) {
+Simulator::Simulator(const Model& model, Workspace& ws) : model_(model), ws_(ws) {
+  const SolverSettings& s = model.solver;
+  OdeProblem problem;
+  problem.n = ws.ny;
+  problem.n_events = ws.nc;
+  problem.rhs = [this](double t, const double* yy, double* dy) {
+    return evaluate(model_, ws_, t, yy, dy);
+  };
+  problem.events = [this](double, const double* yy, double* g) {
+    event_functions(model_, ws_, yy, g);
+  };
+  IntegratorOptions opt{s.rtol, s.atol, s.max_step, s.max_steps};
+  integrator_ = s.integrator == IntegratorKind::bdf ? make_cvode_bdf(problem, opt)
+                                                    : make_dopri5(problem, opt);
+  y_.resize(ws.ny);
+  ydot_.resize(ws.ny);
+  g_event_.resize(ws.nc);
+}
+
+Simulator::~Simulator() = default;
+
+IntegratorStats Simulator::stats() const { return integrator_->stats(); }
+const char* Simulator::integrator_name() const { return integrator_->name(); }
+
+void Simulator::start(double t, const Eigen::VectorXd& y) {
+  // Discrete state: a journal already pressed into its bearing starts in contact.
+  for (int k = 0; k < ws_.nc; ++k) {
+    double delta, delta_dot;
+    clearance_gap(model_, ws_, k, y.data(), delta, delta_dot);
+    ws_.contact[k] = {delta > 0.0, std::abs(delta_dot)};
+  }
+  t_ = t;
+  y_ = y;
+  status_ = RunStatus{};
+  integrator_->reset(t, y);
+}
+
+bool Simulator::advance_to(double t_target, Observer* observer) {
+  while (t_ < t_target) {
+    const Advance adv = integrator_->advance(t_target, y_);
+    t_ = adv.t;
+    if (adv.kind == Advance::failure) {
+      evaluate(model_, ws_, adv.t, y_.data(), ydot_.data());
+      status_ = {false, adv.t, "",
+                 std::string("integrator ") + integrator_->name() + " failed: " + adv.message +
+                     "; state: " + describe_contacts(model_, ws_)};
+      return false;
+    }
+    if (adv.kind == Advance::reached) {
+      t_ = t_target;
+      return true;
+    }
+    // The integrator located g_k = s_k δ_k rising through zero: flip every joint now on the
+    // far side (g_k ≥ 0); at round-off (δ = ±1e-17) trust the largest g_k. Read δ̇⁻ here.
+    event_functions(model_, ws_, y_.data(), g_event_.data());
+    int first = 0;
+    for (int c = 1; c < ws_.nc; ++c)
+      if (g_event_[c] > g_event_[first]) first = c;
+    for (int c = 0; c < ws_.nc; ++c) {
+      if (!(g_event_[c] >= 0.0 || c == first)) continue;
+      double delta, delta_dot;
+      clearance_gap(model_, ws_, c, y_.data(), delta, delta_dot);
+      ContactState& cs = ws_.contact[c];
+      cs.in_contact = !cs.in_contact;
+      if (cs.in_contact) cs.impact_velocity = delta_dot;
+      if (observer) observer->event({adv.t, c, cs.in_contact, delta_dot}, ws_);
+    }
+    integrator_->reset(adv.t, y_);
+  }
+  return true;
+}
+
+RunResult simulate(const Model& model, Workspace& ws, Observer& observer,
+                   const SectionSchedule& sections) {
   const auto wall0 = std::chrono::steady_clock::now();
   const SolverSettings& s = model.solver;
   RunResult result;
   Eigen::VectorXd y = initial_state(model, ws);
-  Eigen::VectorXd ydot(ws.ny), g_event(ws.nc);
+  Eigen::VectorXd ydot(ws.ny);
+  Simulator sim(model, ws);
+  result.integrator = sim.integrator_name();
+  sim.start(0.0, y);
 
-  OdeProblem problem;
-  problem.n = ws.ny;
-  problem.n_events = ws.nc;
-  problem.rhs = [&](double t, const double* yy, double* dy) {
-    return evaluate(model, ws, t, yy, dy);
-  };
-  problem.events = [&](double, const double* yy, double* g) {
-    event_functions(model, ws, yy, g);
-  };
-  IntegratorOptions opt{s.rtol, s.atol, s.max_step, s.max_steps};
-  auto integrator = s.integrator == IntegratorKind::bdf ? make_cvode_bdf(problem, opt)
-                                                        : make_dopri5(problem, opt);
-  result.integrator = integrator->name();
-
-  // Discrete state at t = 0: a journal already pressed into its bearing starts in contact.
-  for (int k = 0; k < ws.nc; ++k) {
-    double delta, delta_dot;
-    clearance_gap(model, ws, k, y.data(), delta, delta_dot);
-    ws.contact[k] = {delta > 0.0, std::abs(delta_dot)};
-  }
-  integrator->reset(0.0, y);
-
-  // Outputs every interval, and at end_time when it is not a multiple of the interval.
+  // Outputs every interval, and at end_time when it is not a multiple of the interval;
+  // stroboscopic sections merged into the same schedule.
   const long n_out = static_cast<long>(std::ceil(s.end_time / s.output_interval - 1e-9));
-  auto emit = [&](double t) -> bool {
+  long k_section = 0;
+  auto next_section = [&]() {
+    return sections.period > 0.0 ? sections.start + k_section * sections.period
+                                 : std::numeric_limits<double>::infinity();
+  };
+  while (sections.period > 0.0 && next_section() < 0.0) ++k_section;
+
+  auto evaluate_here = [&](double t) {
     const bool finite = evaluate(model, ws, t, y.data(), ydot.data());
+    if (!finite)
+      result.status = {false, t, "", "the state or its derivative is not finite (NaN/Inf); " +
+                                         describe_contacts(model, ws)};
+    return finite;
+  };
+  auto emit = [&](double t) -> bool {
+    const bool finite = evaluate_here(t);
     result.max_constraint_violation =
         std::max(result.max_constraint_violation, ws.constraint_violation);
     observer.output(t, y, ws);
     ++result.outputs;
-    if (!finite) {
-      result.status = {false, t, "", "the state or its derivative is not finite (NaN/Inf); " +
-                                         describe_contacts(model, ws)};
-      return false;
-    }
+    if (!finite) return false;
     if (journal_through_bearing(model, ws, result.status, t)) return false;
     observer.progress(t, s.end_time);
     return true;
   };
 
-  if (emit(0.0)) {
-    for (long k = 1; k <= n_out;) {
-      const double t_out = std::min(k * s.output_interval, s.end_time);
-      const Advance adv = integrator->advance(t_out, y);
-      if (adv.kind == Advance::failure) {
-        evaluate(model, ws, adv.t, y.data(), ydot.data());
-        result.status = {false, adv.t, "",
-                         "integrator " + result.integrator + " failed: " + adv.message +
-                             "; state: " + describe_contacts(model, ws)};
-        break;
-      }
-      if (adv.kind == Advance::event) {
-        // The integrator located g_k = s_k δ_k rising through zero: flip every joint now on the
-        // far side (g_k ≥ 0); at round-off (δ = ±1e-17) trust the largest g_k. Read δ̇⁻ here.
-        event_functions(model, ws, y.data(), g_event.data());
-        int first = 0;
-        for (int c = 1; c < ws.nc; ++c)
-          if (g_event[c] > g_event[first]) first = c;
-        for (int c = 0; c < ws.nc; ++c) {
-          if (!(g_event[c] >= 0.0 || c == first)) continue;
-          double delta, delta_dot;
-          clearance_gap(model, ws, c, y.data(), delta, delta_dot);
-          ContactState& cs = ws.contact[c];
-          cs.in_contact = !cs.in_contact;
-          if (cs.in_contact) cs.impact_velocity = delta_dot;
-          observer.event({adv.t, c, cs.in_contact, delta_dot}, ws);
-        }
-        integrator->reset(adv.t, y);
-        continue;
-      }
-      if (!emit(t_out)) break;
-      ++k;
-    }
+  bool ok = true;
+  if (next_section() <= 0.0) {
+    if ((ok = evaluate_here(0.0))) observer.section(0.0, y, ws);
+    ++k_section;
   }
-  result.stats = integrator->stats();
+  ok = ok && emit(0.0);
+  for (long k = 1; ok && k <= n_out;) {
+    const double t_out = std::min(k * s.output_interval, s.end_time);
+    const double t_sec = next_section();
+    const bool is_section = t_sec < t_out - 1e-12 * t_out && t_sec <= s.end_time;
+    const double target = is_section ? t_sec : t_out;
+    if (!sim.advance_to(target, &observer)) {
+      result.status = sim.status();
+      y = sim.state();
+      break;
+    }
+    y = sim.state();
+    if (is_section) {
+      if (!(ok = evaluate_here(target))) break;
+      observer.section(target, y, ws);
+      ++k_section;
+      continue;
+    }
+    if (std::abs(t_sec - t_out) <= 1e-12 * t_out) {  // a section on an output time
+      if (!(ok = evaluate_here(target))) break;
+      observer.section(target, y, ws);
+      ++k_section;
+    }
+    ok = emit(t_out);
+    ++k;
+  }
+  result.stats = sim.stats();
   result.wall_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   return result;

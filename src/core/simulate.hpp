@@ -4,6 +4,7 @@
 /// interval (from dense output, independent of the steps), located contact onsets and
 /// separations, and numerical failures turned into a status.
 #include <Eigen/Core>
+#include <memory>
 #include <string>
 
 #include "core/dynamics.hpp"
@@ -29,6 +30,15 @@ class Observer {
   virtual void event(const ContactEvent&, const Workspace&) {}
   /// Called after each output; `t_end` is the final time.
   virtual void progress(double /*t*/, double /*t_end*/) {}
+  /// Called at every stroboscopic section time (see SectionSchedule); `ws` is evaluated there.
+  virtual void section(double /*t*/, const Eigen::VectorXd& /*y*/, const Workspace& /*ws*/) {}
+};
+
+/// Stroboscopic Poincaré sections at t = start + k·period (k ≥ 0), taken from the integrator's
+/// dense output like the regular outputs. period 0: none.
+struct SectionSchedule {
+  double period = 0.0;
+  double start = 0.0;
 };
 
 struct RunStatus {
@@ -47,8 +57,36 @@ struct RunResult {
   long outputs = 0;
 };
 
+/// Integrates one model forward with its contact events, from a state the caller sets: the
+/// building block of simulate() and of analyses that restart from modified states (Lyapunov).
+class Simulator {
+ public:
+  Simulator(const Model& model, Workspace& ws);
+  ~Simulator();
+  /// Starts from y at time t; each joint's mode follows the sign of its gap (δ̇⁻ = |δ̇| if in
+  /// contact).
+  void start(double t, const Eigen::VectorXd& y);
+  /// Integrates to t_target, handling contact events (reported to `observer` when given).
+  /// Returns false on a numerical failure; status() says what happened.
+  bool advance_to(double t_target, Observer* observer);
+  double time() const { return t_; }
+  const Eigen::VectorXd& state() const { return y_; }
+  const RunStatus& status() const { return status_; }
+  IntegratorStats stats() const;
+  const char* integrator_name() const;
+
+ private:
+  const Model& model_;
+  Workspace& ws_;
+  std::unique_ptr<Integrator> integrator_;
+  Eigen::VectorXd y_, g_event_, ydot_;
+  double t_ = 0.0;
+  RunStatus status_;
+};
+
 /// Runs the model's solver settings from the initial-state rule to end_time.
 /// Throws std::runtime_error only when no consistent initial state exists.
-RunResult simulate(const Model& model, Workspace& ws, Observer& observer);
+RunResult simulate(const Model& model, Workspace& ws, Observer& observer,
+                   const SectionSchedule& sections = {});
 
 }  // namespace lash
