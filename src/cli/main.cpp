@@ -4,11 +4,14 @@
 #include <fmt/format.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
+#include <fstream>
 #include <filesystem>
 #include <iostream>
 
 #include "io/model_loader.hpp"
+#include "io/report.hpp"
 #include "io/results_writer.hpp"
 
 namespace {
@@ -16,12 +19,15 @@ namespace {
 /// Forwards to the results writer and shows progress on a terminal.
 class ProgressObserver : public lash::Observer {
  public:
-  ProgressObserver(lash::ResultsWriter& w, bool show) : w_(w), show_(show) {}
+  /// `w` may be null (progress only).
+  ProgressObserver(lash::ResultsWriter* w, bool show) : w_(w), show_(show) {}
   void output(double t, const Eigen::VectorXd& y, const lash::Workspace& ws) override {
-    w_.output(t, y, ws);
+    if (w_) w_->output(t, y, ws);
     rhs_ = ws.rhs_evaluations;
   }
-  void event(const lash::ContactEvent& e, const lash::Workspace& ws) override { w_.event(e, ws); }
+  void event(const lash::ContactEvent& e, const lash::Workspace& ws) override {
+    if (w_) w_->event(e, ws);
+  }
   void progress(double t, double t_end) override {
     if (!show_) return;
     const auto now = std::chrono::steady_clock::now();
@@ -34,7 +40,7 @@ class ProgressObserver : public lash::Observer {
   }
 
  private:
-  lash::ResultsWriter& w_;
+  lash::ResultsWriter* w_;
   bool show_;
   long rhs_ = 0;
   std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now(), last_{};
@@ -71,6 +77,38 @@ int main(int argc, char** argv) {
                   "--set drivers.crank.speed_rpm=3000 --set solver.integrator=bdf")
       ->take_all();
   run->add_flag("-q,--quiet", quiet, "No progress line and no closing summary");
+  bool with_report = false;
+  run->add_flag("--report", with_report,
+                "Also analyse the run and write report.html, report_data.json and figures/");
+
+  std::string run_dir;
+  auto* report = app.add_subcommand(
+      "report", "Analyse an earlier run folder (re-running its model_resolved.yaml) and write "
+                "report.html, report_data.json and figures/ into it");
+  report->add_option("folder", run_dir, "A folder written by `lash run`")
+      ->required()
+      ->check(CLI::ExistingDirectory);
+
+  auto* analyze = app.add_subcommand(
+      "analyze", "Nonlinear-dynamics analyses of an earlier run folder; prints them and writes "
+                 "analysis.json");
+  analyze->add_option("folder", run_dir, "A folder written by `lash run`")
+      ->required()
+      ->check(CLI::ExistingDirectory);
+  std::string poincare_driver;
+  std::vector<std::string> fft_channels;
+  bool lyapunov = false;
+  int discard_periods = 1;
+  analyze->add_option("--poincare", poincare_driver,
+                      "Stroboscopic Poincaré section once per period of this constant-speed "
+                      "driver (default: the first one)");
+  analyze->add_option("--fft", fft_channels, "Amplitude spectrum of these channels, e.g. slider.ax")
+      ->take_all();
+  analyze->add_flag("--lyapunov", lyapunov, "Largest Lyapunov exponent (two trajectories)");
+  analyze->add_option("--discard", discard_periods, "Transient periods to discard (default 1)");
+  double lyapunov_d0 = 0.0;
+  analyze->add_option("--lyapunov-d0", lyapunov_d0,
+                      "Separation of the two trajectories, m (default 2e-4 x clearance, <= 1e-7)");
 
   auto* check = app.add_subcommand("check", "Validate a model: list every problem with file:line:column");
   check->add_option("model", model_path, "Model file (YAML)")->required()->check(CLI::ExistingFile);
@@ -83,6 +121,13 @@ int main(int argc, char** argv) {
     return app.exit(e) == 0 ? 0 : 2;
   }
 
+  if (*report || *analyze) {
+    model_path = run_dir + "/model_resolved.yaml";
+    if (!std::filesystem::exists(model_path)) {
+      std::cerr << run_dir << ": no model_resolved.yaml: not a folder written by `lash run`\n";
+      return 2;
+    }
+  }
   lash::LoadedModel loaded;
   try {
     loaded = lash::load_model_file(model_path, overrides);
@@ -106,20 +151,83 @@ int main(int argc, char** argv) {
     return 0;
   }
 
+  if (*report || *analyze) {
+    lash::ReportOptions ro;
+    ro.discard_periods = discard_periods;
+    if (*analyze) {
+      ro.lyapunov = lyapunov;
+      ro.poincare_driver = poincare_driver;
+      ro.fft_channels = fft_channels;
+      ro.lyapunov_d0 = lyapunov_d0;
+    }
+    try {
+      ProgressObserver progress(nullptr, isatty(STDERR_FILENO));
+      const lash::ReportRun rr = lash::run_with_analysis(loaded, ro, nullptr, &progress);
+      if (*report) {
+        for (const auto& line : lash::write_report(rr.data, run_dir)) std::cout << line << "\n";
+        return rr.result.status.ok ? 0 : 1;
+      }
+      const auto& an = rr.data["analysis"];
+      std::ofstream(run_dir + "/analysis.json") << an.dump(2) << "\n";
+      if (an["poincare"].is_object())
+        fmt::print("poincare: {} sections every {:.6g} s, {} distinct point(s)\n",
+                   an["poincare"]["points"].size(), an["poincare"]["period"].get<double>(),
+                   an["poincare"]["distinct"].get<int>());
+      for (const auto& [name, sp] : an["spectra"].items()) {
+        // The three strongest local maxima.
+        const auto& f = sp["frequency"];
+        const auto& a = sp["amplitude"];
+        std::vector<std::pair<double, double>> peaks;
+        for (size_t k = 1; k + 1 < a.size(); ++k)
+          if (a[k] >= a[k - 1] && a[k] >= a[k + 1]) peaks.push_back({a[k], f[k]});
+        std::sort(peaks.rbegin(), peaks.rend());
+        fmt::print("spectrum {}:", name);
+        for (size_t k = 0; k < std::min<size_t>(3, peaks.size()); ++k)
+          fmt::print(" {:.6g} Hz ({:.4g})", peaks[k].second, peaks[k].first);
+        fmt::print("\n");
+      }
+      if (an["lyapunov"].is_object() && !an["lyapunov"]["exponent"].is_null())
+        fmt::print("largest Lyapunov exponent: {:.4g} 1/s over {} renormalisations\n",
+                   an["lyapunov"]["exponent"].get<double>(),
+                   an["lyapunov"]["renormalisations"].get<int>());
+      fmt::print("verdict: {}", an["verdict"]["class"].get<std::string>());
+      for (const auto& e : an["verdict"]["evidence"]) fmt::print("; {}", e.get<std::string>());
+      fmt::print("\nwrote {}/analysis.json\n", run_dir);
+      return rr.result.status.ok ? 0 : 1;
+    } catch (const std::invalid_argument& e) {
+      std::cerr << "error: " << e.what() << "\n";
+      return 2;
+    } catch (const std::exception& e) {
+      std::cerr << "error: " << e.what() << "\n";
+      return 1;
+    }
+  }
+
   if (out_dir.empty())
     out_dir = "out/" + std::filesystem::path(model_path).stem().string();
   try {
     lash::Workspace ws(model);
     lash::ResultsWriter writer(model, out_dir);
-    ProgressObserver observer(writer, !quiet && isatty(STDERR_FILENO));
     lash::RunResult result;
+    lash::ReportRun rr;
     try {
-      result = lash::simulate(model, ws, observer);
+      if (with_report) {
+        ProgressObserver progress(nullptr, !quiet && isatty(STDERR_FILENO));
+        rr = lash::run_with_analysis(loaded, lash::ReportOptions{}, &writer, &progress);
+        result = rr.result;
+      } else {
+        ProgressObserver observer(&writer, !quiet && isatty(STDERR_FILENO));
+        result = lash::simulate(model, ws, observer);
+      }
     } catch (const std::runtime_error& e) {  // no consistent initial state
       std::cerr << model_path << ": " << e.what() << "\n";
       return 2;
     }
     writer.finish(result, loaded.resolved_yaml, overrides);
+    if (with_report) {
+      for (const auto& line : lash::write_report(rr.data, out_dir))
+        if (!quiet) std::cout << "report: " << line << "\n";
+    }
     if (!result.status.ok) {
       std::cerr << "\nerror: simulation stopped at t = " << result.status.t << " s"
                 << (result.status.element.empty() ? "" : ", joint '" + result.status.element + "'")

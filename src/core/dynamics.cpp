@@ -452,6 +452,29 @@ double constraint_residual(const Model& model, Workspace& ws, double t, const do
   return ws.phi.cwiseAbs().maxCoeff();
 }
 
+void project_state(const Model& model, Workspace& ws, double t, Eigen::VectorXd& y) {
+  if (ws.m == 0) return;
+  const int nq = ws.nq;
+  Eigen::VectorXd phi(ws.m), phi_dot(ws.m);
+  Eigen::MatrixXd phi_q(ws.m, nq);
+  double residual = 0.0;
+  for (int it = 0; it < 50; ++it) {
+    update_kin(ws, y.data());
+    build_constraints(model, ws, t, y.data(), false, phi, phi_q, nullptr, nullptr);
+    residual = phi.cwiseAbs().maxCoeff();
+    if (residual < 1e-13) break;
+    Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(phi_q);
+    y.head(nq) -= cod.solve(phi);
+  }
+  if (!(residual < 1e-10))
+    throw std::runtime_error("state projection onto the constraints did not converge (residual " +
+                             std::to_string(residual) + ")");
+  update_kin(ws, y.data());
+  build_constraints(model, ws, t, y.data(), false, phi, phi_q, &phi_dot, nullptr);
+  Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(phi_q);
+  y.segment(nq, nq) -= cod.solve(phi_dot);
+}
+
 Eigen::VectorXd initial_state(const Model& model, Workspace& ws) {
   const int nq = ws.nq;
   const bool ideal = model.solver.initial_state == InitialStateRule::ideal;

@@ -101,6 +101,11 @@ double constraint_residual(const Model& model, Workspace& ws, double t, const do
 /// Throws std::runtime_error if the constraints cannot be satisfied.
 Eigen::VectorXd initial_state(const Model& model, Workspace& ws);
 
+/// Moves y (positions, then velocities) to the nearest state, in the least-squares sense, that
+/// satisfies the model's constraints at time t (clearance joints stay free). Used to perturb a
+/// state consistently (Lyapunov exponents). Throws std::runtime_error if it does not converge.
+void project_state(const Model& model, Workspace& ws, double t, Eigen::VectorXd& y);
+
 /// Driver coordinate target f and its derivatives at t (rad or m).
 void driver_motion(const Model& model, Workspace& ws, int d, double t, double& f, double& fd,
                    double& fdd);

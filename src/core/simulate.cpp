@@ -64,12 +64,15 @@ Simulator::~Simulator() = default;
 IntegratorStats Simulator::stats() const { return integrator_->stats(); }
 const char* Simulator::integrator_name() const { return integrator_->name(); }
 
-void Simulator::start(double t, const Eigen::VectorXd& y) {
+void Simulator::start(double t, const Eigen::VectorXd& y, const std::vector<ContactState>* modes) {
   // Discrete state: a journal already pressed into its bearing starts in contact.
   for (int k = 0; k < ws_.nc; ++k) {
     double delta, delta_dot;
     clearance_gap(model_, ws_, k, y.data(), delta, delta_dot);
-    ws_.contact[k] = {delta > 0.0, std::abs(delta_dot)};
+    if (modes && (*modes)[k].in_contact == (delta > 0.0))
+      ws_.contact[k] = (*modes)[k];
+    else
+      ws_.contact[k] = {delta > 0.0, std::abs(delta_dot)};
   }
   t_ = t;
   y_ = y;

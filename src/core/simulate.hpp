@@ -64,8 +64,8 @@ class Simulator {
   Simulator(const Model& model, Workspace& ws);
   ~Simulator();
   /// Starts from y at time t; each joint's mode follows the sign of its gap (δ̇⁻ = |δ̇| if in
-  /// contact).
-  void start(double t, const Eigen::VectorXd& y);
+  /// contact), or `modes` (e.g. a nearby trajectory's) where they agree with that sign.
+  void start(double t, const Eigen::VectorXd& y, const std::vector<ContactState>* modes = nullptr);
   /// Integrates to t_target, handling contact events (reported to `observer` when given).
   /// Returns false on a numerical failure; status() says what happened.
   bool advance_to(double t_target, Observer* observer);

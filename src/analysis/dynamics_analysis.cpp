@@ -1,0 +1,137 @@
+#include "analysis/dynamics_analysis.hpp"
+
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+namespace lash {
+
+int count_distinct(const std::vector<std::vector<double>>& points, double tol) {
+  std::vector<const std::vector<double>*> centres;
+  for (const auto& p : points) {
+    bool found = false;
+    for (const auto* c : centres) {
+      double d2 = 0;
+      for (size_t i = 0; i < p.size(); ++i) d2 += (p[i] - (*c)[i]) * (p[i] - (*c)[i]);
+      if (d2 <= tol * tol) {
+        found = true;
+        break;
+      }
+    }
+    if (!found) centres.push_back(&p);
+  }
+  return static_cast<int>(centres.size());
+}
+
+LyapunovResult largest_lyapunov(
+    const std::function<bool(int, Eigen::VectorXd&, double, double)>& flow, Eigen::VectorXd y0,
+    const std::function<double(const Eigen::VectorXd&, const Eigen::VectorXd&)>& norm,
+    const LyapunovOptions& o,
+    const std::function<Eigen::VectorXd(const Eigen::VectorXd&, double)>& perturb) {
+  LyapunovResult r;
+  double t = 0.0;
+  Eigen::VectorXd y = std::move(y0);
+  for (int i = 0; i < o.transient; ++i, t += o.interval)
+    if (!flow(0, y, t, t + o.interval)) return {0, 0, {}, false, "the transient run failed"};
+  Eigen::VectorXd yp = y;
+  if (perturb) {
+    yp = perturb(y, o.d0);
+  } else {
+    yp[0] += o.d0;
+  }
+  const double t_start = t;
+  double sum = 0.0;
+  for (int i = 0; i < o.intervals; ++i, t += o.interval) {
+    if (!flow(0, y, t, t + o.interval) || !flow(1, yp, t, t + o.interval)) {
+      r.ok = false;
+      r.message = "a trajectory failed at t = " + std::to_string(t);
+      break;
+    }
+    const double d = norm(y, yp);
+    if (!(d > 1e-12 * o.d0)) {
+      r.ok = false;
+      r.message = "the two trajectories coincide at t = " + std::to_string(t + o.interval) +
+                  " (no free direction to perturb, or strongly contracting)";
+      break;
+    }
+    sum += std::log(d / o.d0);
+    yp = y + (yp - y) * (o.d0 / d);
+    ++r.renormalisations;
+    r.history.emplace_back(t + o.interval, sum / (t + o.interval - t_start));
+  }
+  r.exponent = r.renormalisations ? sum / (r.renormalisations * o.interval) : 0.0;
+  return r;
+}
+
+ModeSummary contact_modes(const std::vector<double>& times, const std::vector<bool>& onset,
+                          const std::vector<double>& velocities, bool in_contact_at_t0,
+                          double t0, double t1, double continuous_time) {
+  ModeSummary m;
+  bool in = in_contact_at_t0;
+  double start = t0;
+  auto close = [&](double end) {
+    ContactEpisode e{start, end, end - start >= continuous_time};
+    m.episodes.push_back(e);
+  };
+  for (size_t i = 0; i < times.size(); ++i) {
+    if (times[i] < t0 || times[i] > t1) continue;
+    if (onset[i] && !in) {
+      in = true;
+      start = times[i];
+      ++m.impacts;
+      m.impact_velocities.push_back(velocities[i]);
+    } else if (!onset[i] && in) {
+      in = false;
+      close(times[i]);
+    }
+  }
+  if (in) close(t1);
+  const double span = t1 - t0;
+  double impact = 0, continuous = 0;
+  for (const auto& e : m.episodes) (e.continuous ? continuous : impact) += e.end - e.start;
+  if (span > 0) {
+    m.impact_share = impact / span;
+    m.continuous_share = continuous / span;
+    m.free_flight_share = 1.0 - m.impact_share - m.continuous_share;
+  }
+  return m;
+}
+
+Verdict classify_motion(double lyapunov, double period, int distinct, int sections,
+                        int non_harmonic_peaks) {
+  Verdict v;
+  std::ostringstream s;
+  const bool have_lyap = std::isfinite(lyapunov);
+  if (have_lyap) {
+    s << "largest Lyapunov exponent " << lyapunov << " 1/s";
+    if (period > 0) s << " (λT = " << lyapunov * period << " per driver period)";
+    v.evidence.push_back(s.str());
+    s.str("");
+  }
+  if (sections > 0) {
+    s << distinct << " distinct Poincaré point" << (distinct == 1 ? "" : "s") << " in "
+      << sections << " sections";
+    v.evidence.push_back(s.str());
+    s.str("");
+  }
+  if (non_harmonic_peaks >= 0) {
+    s << non_harmonic_peaks << " strong spectral peak" << (non_harmonic_peaks == 1 ? "" : "s")
+      << " off the driving harmonics";
+    v.evidence.push_back(s.str());
+  }
+  const double growth = have_lyap && period > 0 ? lyapunov * period : (have_lyap ? lyapunov : 0);
+  if (have_lyap && growth > 0.1) {
+    v.kind = "chaotic";
+  } else if (sections >= 4 && 2 * distinct <= sections && distinct <= 8) {
+    v.kind = "periodic";
+    v.evidence.push_back("period-" + std::to_string(distinct) + " orbit");
+  } else if (sections >= 4 && (!have_lyap || growth <= 0.1)) {
+    v.kind = "quasi-periodic";
+  } else {
+    v.kind = "undetermined";
+    v.evidence.push_back("too few sections or no Lyapunov exponent");
+  }
+  return v;
+}
+
+}  // namespace lash

@@ -1,0 +1,77 @@
+#pragma once
+/// @file dynamics_analysis.hpp
+/// Nonlinear-dynamics measures: Poincaré point clustering, the largest Lyapunov exponent, contact
+/// mode episodes, and the periodic / quasi-periodic / chaotic verdict.
+#include <Eigen/Core>
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace lash {
+
+/// Number of distinct points: greedy clustering, a point joins a cluster whose first member is
+/// within `tol` (Euclidean). A period-k orbit sampled stroboscopically gives k.
+int count_distinct(const std::vector<std::vector<double>>& points, double tol);
+
+/// Largest Lyapunov exponent by two nearby trajectories with renormalisation (Benettin et al.,
+/// Meccanica 1980): every `interval`, the separation d is measured with `norm`, ln(d/d0) is
+/// accumulated and the perturbed state is pulled back to distance d0 along the separation.
+struct LyapunovResult {
+  double exponent = 0.0;  ///< 1/time unit of `interval` (1/s for flows, per iteration for maps)
+  int renormalisations = 0;
+  std::vector<std::pair<double, double>> history;  ///< (time, running estimate)
+  bool ok = true;
+  std::string message;
+};
+
+struct LyapunovOptions {
+  double d0 = 1e-8;           ///< initial and renormalised separation (in `norm` units)
+  double interval = 1.0;      ///< renormalisation interval
+  int transient = 0;          ///< intervals discarded before accumulating
+  int intervals = 1000;       ///< intervals accumulated
+};
+
+/// `flow(which, y, t0, t1)` advances trajectory `which` (0 reference, 1 perturbed) from t0 to t1
+/// in place and returns false on failure; the perturbed state handed to it after a
+/// renormalisation is a new initial condition.
+/// `norm(a, b)` is the separation between two states. `perturb(y, d0)` returns a state at
+/// separation d0 from y (default: y + d0 e₀).
+LyapunovResult largest_lyapunov(
+    const std::function<bool(int, Eigen::VectorXd&, double, double)>& flow, Eigen::VectorXd y0,
+    const std::function<double(const Eigen::VectorXd&, const Eigen::VectorXd&)>& norm,
+    const LyapunovOptions& options,
+    const std::function<Eigen::VectorXd(const Eigen::VectorXd&, double)>& perturb = {});
+
+/// A contact episode of one clearance joint, classified by its duration.
+struct ContactEpisode {
+  double start = 0.0, end = 0.0;
+  bool continuous = false;  ///< longer than the continuous-contact threshold
+};
+
+struct ModeSummary {
+  std::vector<ContactEpisode> episodes;
+  double free_flight_share = 0.0, impact_share = 0.0, continuous_share = 0.0;
+  int impacts = 0;                      ///< contact onsets
+  std::vector<double> impact_velocities;
+};
+
+/// Contact episodes from located onsets/separations (time, onset?, velocity) over [t0, t1]:
+/// episodes longer than `continuous_time` are continuous contact (the journal follows the
+/// bearing wall), shorter ones impacts; the rest of the time is free flight.
+ModeSummary contact_modes(const std::vector<double>& times, const std::vector<bool>& onset,
+                          const std::vector<double>& velocities, bool in_contact_at_t0,
+                          double t0, double t1, double continuous_time);
+
+struct Verdict {
+  std::string kind;  ///< periodic, quasi-periodic, chaotic, undetermined
+  std::vector<std::string> evidence;
+};
+
+/// Combines the evidence: the largest Lyapunov exponent λ (NaN if not computed) against the
+/// period T (λT > 0.1: chaotic), the number of distinct stroboscopic Poincaré points among
+/// `sections` (≤ 8: periodic with that many points per period), and the spectrum's count of
+/// strong peaks not harmonics of the driving frequency (evidence only).
+Verdict classify_motion(double lyapunov, double period, int distinct, int sections,
+                        int non_harmonic_peaks);
+
+}  // namespace lash

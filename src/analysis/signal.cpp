@@ -1,0 +1,90 @@
+#include "analysis/signal.hpp"
+
+#include <fftw3.h>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace lash {
+
+void ChannelStats::add(double t, double v) {
+  if (t < t0 || t > t1) return;
+  if (n == 0) min = max = v;
+  min = std::min(min, v);
+  max = std::max(max, v);
+  sum += v;
+  sum_sq += v * v;
+  ++n;
+}
+double ChannelStats::peak() const { return std::max(std::abs(min), std::abs(max)); }
+double ChannelStats::rms() const { return n ? std::sqrt(sum_sq / n) : 0.0; }
+double ChannelStats::mean() const { return n ? sum / n : 0.0; }
+double ChannelStats::crest() const { return rms() > 0 ? peak() / rms() : 0.0; }
+
+Spectrum amplitude_spectrum(const std::vector<double>& x, double dt, Window window) {
+  const size_t n = x.size();
+  if (n < 4 || !(dt > 0)) throw std::invalid_argument("a spectrum needs >= 4 samples and dt > 0");
+  double mean = 0;
+  for (double v : x) mean += v;
+  mean /= n;
+  std::vector<double> in(n), w(n, 1.0);
+  if (window == Window::hann)
+    for (size_t i = 0; i < n; ++i) w[i] = 0.5 - 0.5 * std::cos(2 * M_PI * i / n);  // periodic Hann
+  double sw = 0, sw2 = 0;
+  for (size_t i = 0; i < n; ++i) {
+    in[i] = (x[i] - mean) * w[i];
+    sw += w[i];
+    sw2 += w[i] * w[i];
+  }
+  const size_t nf = n / 2 + 1;
+  fftw_complex* out = fftw_alloc_complex(nf);
+  fftw_plan plan = fftw_plan_dft_r2c_1d(static_cast<int>(n), in.data(), out, FFTW_ESTIMATE);
+  fftw_execute(plan);
+  Spectrum s;
+  s.window = window == Window::hann ? "hann" : "rectangular";
+  s.frequency.resize(nf);
+  s.amplitude.resize(nf);
+  s.psd.resize(nf);
+  const double fs = 1.0 / dt;
+  for (size_t k = 0; k < nf; ++k) {
+    const double mag2 = out[k][0] * out[k][0] + out[k][1] * out[k][1];
+    const bool edge = k == 0 || (n % 2 == 0 && k == nf - 1);  // DC and Nyquist are not doubled
+    s.frequency[k] = k * fs / n;
+    s.amplitude[k] = (edge ? 1.0 : 2.0) * std::sqrt(mag2) / sw;
+    s.psd[k] = (edge ? 1.0 : 2.0) * mag2 / (fs * sw2);
+  }
+  fftw_destroy_plan(plan);
+  fftw_free(out);
+  return s;
+}
+
+void decimate_min_max(const std::vector<double>& t, const std::vector<double>& v, size_t buckets,
+                      std::vector<double>& t_out, std::vector<double>& v_out) {
+  t_out.clear();
+  v_out.clear();
+  const size_t n = std::min(t.size(), v.size());
+  if (n <= 2 * buckets || buckets == 0) {
+    t_out.assign(t.begin(), t.begin() + n);
+    v_out.assign(v.begin(), v.begin() + n);
+    return;
+  }
+  const double per = static_cast<double>(n) / buckets;
+  for (size_t b = 0; b < buckets; ++b) {
+    const size_t i0 = static_cast<size_t>(b * per), i1 = std::min(n, static_cast<size_t>((b + 1) * per));
+    size_t imin = i0, imax = i0;
+    for (size_t i = i0; i < i1; ++i) {
+      if (v[i] < v[imin]) imin = i;
+      if (v[i] > v[imax]) imax = i;
+    }
+    const size_t a = std::min(imin, imax), c = std::max(imin, imax);
+    t_out.push_back(t[a]);
+    v_out.push_back(v[a]);
+    if (c != a) {
+      t_out.push_back(t[c]);
+      v_out.push_back(v[c]);
+    }
+  }
+}
+
+}  // namespace lash

@@ -1,0 +1,124 @@
+// Poincaré clustering, Lyapunov exponents and contact modes on systems with known answers.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "analysis/dynamics_analysis.hpp"
+#include "core/integrator.hpp"
+
+using namespace lash;
+
+TEST(Poincare, PeriodicAndPeriodTwoOrbits) {
+  // Stroboscopic samples of x = cos(ωt) at t = kT (T = 2π/ω): one point; of cos(ωt/2): two.
+  std::vector<std::vector<double>> p1, p2, q;
+  for (int k = 0; k < 20; ++k) {
+    const double t = k * 2 * M_PI;
+    p1.push_back({std::cos(t), -std::sin(t)});
+    p2.push_back({std::cos(t / 2), -std::sin(t / 2) / 2});
+    q.push_back({std::cos(std::sqrt(2.0) * t), std::sin(std::sqrt(2.0) * t)});  // quasi-periodic
+  }
+  EXPECT_EQ(count_distinct(p1, 1e-9), 1);
+  EXPECT_EQ(count_distinct(p2, 1e-9), 2);
+  EXPECT_EQ(count_distinct(q, 1e-3), 20);
+}
+
+namespace {
+// Flow of an ODE by DOPRI5 at tight tolerances.
+std::function<bool(int, Eigen::VectorXd&, double, double)> ode_flow(OdeProblem p) {
+  return [p](int, Eigen::VectorXd& y, double t0, double t1) {
+    IntegratorOptions o;
+    o.rtol = 1e-10;
+    o.atol = 1e-12;
+    auto in = make_dopri5(p, o);
+    in->reset(t0, y);
+    return in->advance(t1, y).kind == Advance::reached;
+  };
+}
+double euclid(const Eigen::VectorXd& a, const Eigen::VectorXd& b) { return (a - b).norm(); }
+}  // namespace
+
+TEST(Lyapunov, LorenzAtStandardParameters) {
+  // σ = 10, ρ = 28, β = 8/3: λ₁ ≈ 0.9056 (Sprott, Chaos and Time-Series Analysis, 2003).
+  OdeProblem p;
+  p.n = 3;
+  p.rhs = [](double, const double* y, double* d) {
+    d[0] = 10 * (y[1] - y[0]);
+    d[1] = y[0] * (28 - y[2]) - y[1];
+    d[2] = y[0] * y[1] - 8.0 / 3.0 * y[2];
+    return true;
+  };
+  Eigen::VectorXd y0(3);
+  y0 << 1, 1, 20;
+  LyapunovOptions o;
+  o.d0 = 1e-8;
+  o.interval = 0.5;
+  o.transient = 20;
+  o.intervals = 1200;
+  const LyapunovResult r = largest_lyapunov(ode_flow(p), y0, euclid, o);
+  ASSERT_TRUE(r.ok) << r.message;
+  EXPECT_NEAR(r.exponent, 0.9056, 0.05 * 0.9056);
+}
+
+TEST(Lyapunov, LogisticMapAtRFourIsLnTwo) {
+  // x → 4x(1 − x): λ = ln 2 per iteration.
+  auto map = [](int, Eigen::VectorXd& y, double t0, double t1) {
+    for (int i = 0; i < static_cast<int>(std::lround(t1 - t0)); ++i) y[0] = 4 * y[0] * (1 - y[0]);
+    return true;
+  };
+  Eigen::VectorXd y0(1);
+  y0 << 0.3;
+  LyapunovOptions o;
+  o.d0 = 1e-10;
+  o.interval = 1.0;
+  o.transient = 100;
+  o.intervals = 20000;
+  const LyapunovResult r = largest_lyapunov(map, y0, euclid, o);
+  EXPECT_NEAR(r.exponent, std::log(2.0), 0.03 * std::log(2.0));
+}
+
+TEST(Lyapunov, DampedOscillatorIsNotPositive) {
+  // ẍ + 2ζω ẋ + ω² x = 0, ζ = 0.05, ω = 2π: λ = −ζω ≈ −0.314.
+  OdeProblem p;
+  p.n = 2;
+  p.rhs = [](double, const double* y, double* d) {
+    const double w = 2 * M_PI;
+    d[0] = y[1];
+    d[1] = -2 * 0.05 * w * y[1] - w * w * y[0];
+    return true;
+  };
+  Eigen::VectorXd y0(2);
+  y0 << 1, 0;
+  LyapunovOptions o;
+  o.d0 = 1e-8;
+  o.interval = 0.25;
+  o.intervals = 200;
+  const LyapunovResult r = largest_lyapunov(ode_flow(p), y0, euclid, o);
+  EXPECT_LE(r.exponent, 0.0);
+  EXPECT_NEAR(r.exponent, -0.05 * 2 * M_PI, 0.05);
+}
+
+TEST(ContactModes, SharesOfAConstructedHistory) {
+  // Over [0, 1] s: impact 0.10–0.11, continuous contact 0.3–0.6, impact 0.8–0.805.
+  const std::vector<double> t{0.10, 0.11, 0.3, 0.6, 0.8, 0.805};
+  const std::vector<bool> on{true, false, true, false, true, false};
+  const std::vector<double> v{2.0, -1.8, 0.5, -0.1, 1.0, -0.9};
+  const ModeSummary m = contact_modes(t, on, v, false, 0.0, 1.0, 0.05);
+  ASSERT_EQ(m.episodes.size(), 3u);
+  EXPECT_EQ(m.impacts, 3);
+  EXPECT_FALSE(m.episodes[0].continuous);
+  EXPECT_TRUE(m.episodes[1].continuous);
+  EXPECT_NEAR(m.impact_share, 0.015, 1e-12);
+  EXPECT_NEAR(m.continuous_share, 0.3, 1e-12);
+  EXPECT_NEAR(m.free_flight_share, 0.685, 1e-12);
+  EXPECT_EQ(m.impact_velocities, (std::vector<double>{2.0, 0.5, 1.0}));
+  // Starting in contact and never separating: all continuous.
+  const ModeSummary c = contact_modes({}, {}, {}, true, 0.0, 1.0, 0.05);
+  EXPECT_NEAR(c.continuous_share, 1.0, 1e-12);
+}
+
+TEST(Verdict, WeighsTheEvidence) {
+  EXPECT_EQ(classify_motion(5.0, 0.012, 30, 30, 4).kind, "quasi-periodic");   // λT = 0.06
+  EXPECT_EQ(classify_motion(50.0, 0.012, 30, 30, 4).kind, "chaotic");         // λT = 0.6
+  EXPECT_EQ(classify_motion(-3.0, 0.012, 2, 20, 0).kind, "periodic");
+  EXPECT_EQ(classify_motion(std::nan(""), 0.012, 1, 2, -1).kind, "undetermined");
+}

@@ -1,0 +1,65 @@
+// Statistics, spectra and decimation against signals whose answers are known.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "analysis/signal.hpp"
+
+using namespace lash;
+
+TEST(Spectrum, SumOfSinusoidsOnBins) {
+  // 1 kHz sampling, 1 s: 50 Hz amplitude 3 and 120 Hz amplitude 0.5 plus an offset of 7.
+  const double dt = 1e-3;
+  std::vector<double> x(1000);
+  for (size_t i = 0; i < x.size(); ++i) {
+    const double t = i * dt;
+    x[i] = 7 + 3 * std::sin(2 * M_PI * 50 * t) + 0.5 * std::cos(2 * M_PI * 120 * t);
+  }
+  for (Window w : {Window::rectangular, Window::hann}) {
+    const Spectrum s = amplitude_spectrum(x, dt, w);
+    ASSERT_EQ(s.frequency.size(), 501u);
+    EXPECT_DOUBLE_EQ(s.frequency[50], 50.0);
+    EXPECT_NEAR(s.amplitude[50], 3.0, 1e-9);
+    EXPECT_NEAR(s.amplitude[120], 0.5, 1e-9);
+    EXPECT_NEAR(s.amplitude[0], 0.0, 1e-9);  // the mean is removed
+    if (w == Window::rectangular) EXPECT_NEAR(s.amplitude[80], 0.0, 1e-9);
+  }
+  // Parseval with the rectangular window: Σ PSD·df = variance of the signal.
+  const Spectrum s = amplitude_spectrum(x, dt, Window::rectangular);
+  double power = 0;
+  for (double p : s.psd) power += p * (s.frequency[1] - s.frequency[0]);
+  EXPECT_NEAR(power, 3.0 * 3.0 / 2 + 0.5 * 0.5 / 2, 1e-9);
+}
+
+TEST(Spectrum, RejectsTooShortInput) {
+  EXPECT_THROW(amplitude_spectrum({1, 2, 3}, 1e-3), std::invalid_argument);
+  EXPECT_THROW(amplitude_spectrum({1, 2, 3, 4}, 0.0), std::invalid_argument);
+}
+
+TEST(ChannelStats, PeakRmsCrestOfASine) {
+  ChannelStats s;
+  for (int i = 0; i < 100000; ++i) s.add(i * 1e-5, 2.0 * std::sin(2 * M_PI * i / 1000.0));
+  EXPECT_NEAR(s.peak(), 2.0, 1e-6);
+  EXPECT_NEAR(s.rms(), 2.0 / std::sqrt(2.0), 1e-6);
+  EXPECT_NEAR(s.crest(), std::sqrt(2.0), 1e-6);
+  ChannelStats w;
+  w.t0 = 0.5;
+  w.t1 = 0.6;
+  for (int i = 0; i <= 100; ++i) w.add(i * 0.01, i);
+  EXPECT_EQ(w.n, 11);
+  EXPECT_DOUBLE_EQ(w.min, 50);
+  EXPECT_DOUBLE_EQ(w.max, 60);
+}
+
+TEST(Decimation, KeepsSpikes) {
+  std::vector<double> t(100000), v(100000, 0.0);
+  for (size_t i = 0; i < t.size(); ++i) t[i] = i;
+  v[31337] = 1e6;
+  v[77777] = -5e5;
+  std::vector<double> to, vo;
+  decimate_min_max(t, v, 500, to, vo);
+  EXPECT_LE(to.size(), 1000u);
+  EXPECT_EQ(*std::max_element(vo.begin(), vo.end()), 1e6);
+  EXPECT_EQ(*std::min_element(vo.begin(), vo.end()), -5e5);
+  for (size_t i = 1; i < to.size(); ++i) ASSERT_GT(to[i], to[i - 1]);
+}
