@@ -13,7 +13,7 @@ build: deps
 	@cmake --build $(BUILD) -j $(JOBS)
 
 demo: build
-	$(BUILD)/lash run examples/flores_slider_crank.yaml -o out/flores_slider_crank
+	$(BUILD)/lash run examples/flores_slider_crank.yaml -o out/flores_slider_crank --report
 
 test: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
