@@ -275,7 +275,8 @@
     const st = D.status;
     if (st && st.ok === true) badges.append(el('span', {class: 'badge ok',
       text: 'run completed' + (isNum(st.time) && st.time > 0 ? ' · t = ' + fmt(st.time * 1e3) + ' ms' : '')}));
-    else if (st && st.ok === false) badges.append(el('span', {class: 'badge bad', text: 'run stopped'}));
+    else if (st && st.ok === false) badges.append(el('span', {class: 'badge bad',
+      text: 'run stopped' + (isNum(st.time) ? ' at t = ' + fmt(st.time * 1e3) + ' ms' : '')}));
     else badges.append(el('span', {class: 'badge info', text: 'status unknown'}));
     const v = analysis.verdict;
     if (v && v.class) {
@@ -310,7 +311,6 @@
       fig('wall time', isNum(I.wall_seconds) ? fmtSeconds(I.wall_seconds) : '–');
     }
     fig('max constraint violation', fmt(D.max_constraint_violation, 3));
-    if (st && st.ok === false && isNum(st.time)) fig('stopped at', fmt(st.time * 1e3) + ' ms');
     s.append(figs);
     if (!I) notComputed(s, 'integrator statistics');
   }
@@ -576,7 +576,10 @@
           const ins = insets.find((i) => i.joint === j);
           if (ins) {
             g.font = '600 12px system-ui, "DejaVu Sans", sans-serif'; g.fillStyle = '#1d2330';
-            g.fillText(String(ins.tag) + '  ' + j.name, X(pb) + rb + 4, Y(pb) - rb - 2);
+            // Above-right of the bearing, or above-left where it would leave the canvas.
+            const label = String(ins.tag) + '  ' + j.name, lw = g.measureText(label).width;
+            const lx = X(pb) + rb + 4 + lw > W - 4 ? X(pb) - rb - 4 - lw : X(pb) + rb + 4;
+            g.fillText(label, Math.max(4, lx), Math.max(14, Y(pb) - rb - 2));
           }
         } else {
           g.fillStyle = '#ffffff'; g.strokeStyle = '#2b303b'; g.lineWidth = 1.5;
@@ -809,7 +812,7 @@
         return;
       }
       const xs = xMode === 'crank' ? crankX : t;
-      const xs_ = xMode === 'crank' ? {f: 1, unit: '°'} : displayScale('s', maxAbsOf([t]));
+      const xScale = xMode === 'crank' ? {f: 1, unit: '°'} : displayScale('s', maxAbsOf([t]));
       // One y scale per unit, in order of first appearance; the first two get an axis each side.
       const units = [];
       sel.forEach((n) => { const u = unitOf(n) || '–'; if (!units.includes(u)) units.push(u); });
@@ -819,8 +822,8 @@
         scaleOf[u] = displayScale(u === '–' ? '' : u, maxAbsOf(arrays));
       });
       const data = [xs];
-      const ser = [{label: xMode === 'crank' ? 'θ [°]' : 't [' + xs_.unit + ']',
-                    value: (u, v) => (v == null ? '–' : fmtTick(+(v * xs_.f).toPrecision(6)))}];
+      const ser = [{label: xMode === 'crank' ? 'θ [°]' : 't [' + xScale.unit + ']',
+                    value: (u, v) => (v == null ? '–' : fmtTick(+(v * xScale.f).toPrecision(6)))}];
       sel.forEach((n, i) => {
         const u = unitOf(n) || '–';
         const color = PALETTE[i % PALETTE.length];
@@ -835,7 +838,7 @@
                     points: {show: false}});
         }
       });
-      const axes = [axis({scale: 'x', side: 2, f: xs_.f, label: xMode === 'crank' ? 'crank angle [°]' : 'time [' + xs_.unit + ']'})];
+      const axes = [axis({scale: 'x', side: 2, f: xScale.f, label: xMode === 'crank' ? 'crank angle [°]' : 'time [' + xScale.unit + ']'})];
       units.forEach((u, k) => {
         axes.push(axis({scale: u, side: k === 1 ? 1 : 3, f: scaleOf[u].f, label: '[' + unitText(scaleOf[u].unit) + ']',
                         grid: k === 0 ? GRID : {show: false}}));
@@ -1195,8 +1198,8 @@
   guarded('the model', renderModel);
   guarded('the animation', renderAnimation);
   guarded('the time series', renderTimeSeries);
-  guarded('the statistics', renderStatistics);
   guarded('the clearance joints', renderClearance);
+  guarded('the statistics', renderStatistics);
   guarded('the Poincaré section', renderPoincare);
   guarded('the spectra', renderSpectra);
   guarded('the phase portraits', renderPhase);

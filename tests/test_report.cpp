@@ -58,8 +58,21 @@ solver: {rtol: 1e-10, atol: 1e-13, end_time: 1.3, output_interval: 1e-3, initial
   const auto& p = r.data["analysis"]["poincare"];
   EXPECT_GE(p["points"].size(), 18u);
   EXPECT_EQ(p["distinct"].get<int>(), 2);
-  // The block's x at consecutive sections: +0.01, −0.01, ...
   EXPECT_EQ(r.data["analysis"]["verdict"]["class"], "periodic");
+
+  // Event-based: the block's velocity falling through zero happens at its largest x, once per
+  // oscillation (2T): the same state every time, one distinct point.
+  o.section_planes = {"block.vx=0,down"};
+  const ReportRun e = analyse(yaml, {}, o);
+  const auto& pe = e.data["analysis"]["poincare"];
+  EXPECT_EQ(pe["kind"], "event");
+  const double t_osc = 4 * M_PI / w;  // 0.1257 s; sections after the 1-period transient
+  EXPECT_NEAR(static_cast<double>(pe["points"].size()), std::floor((1.3 - 2 * M_PI / w) / t_osc), 1.0);
+  EXPECT_EQ(pe["distinct"].get<int>(), 1);
+  for (const auto& p : pe["points"]) EXPECT_NEAR(p[0].get<double>(), 0.0, 1e-9);  // wheel x
+  // Bad planes are reported.
+  o.section_planes = {"block.speed=0"};
+  EXPECT_THROW(analyse(yaml, {}, o), std::invalid_argument);
 }
 
 TEST(Report, FloresExampleDataIsCompleteAndConsistent) {

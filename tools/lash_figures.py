@@ -49,6 +49,8 @@ ENVELOPE_BUCKETS = 2000          # min/max buckets per full-resolution curve (~2
 CSV_CHUNK_BYTES = 8 << 20        # bytes of timeseries.csv parsed at a time
 MAX_REVOLUTIONS_ON_ANGLE_AXIS = 20
 MIN_SAMPLES_PER_REVOLUTION = 8   # fewer decimated samples than this: the angle cannot be unwrapped
+MAX_LINE_POINTS = 4000           # smooth curves given with more points are thinned to this
+MAX_VECTOR_MARKERS = 5000        # scatter plots with more points are rasterized in SVG/PDF
 SINGLE_COLUMN_IN = 3.5           # figure widths of a two-column paper, inches
 DOUBLE_COLUMN_IN = 7.0
 
@@ -220,11 +222,11 @@ def read_envelopes(csv_path, columns, t0, t1, buckets=ENVELOPE_BUCKETS):
                 nan = np.isnan(v)
                 for sign, acc, acc_t in ((1.0, lo, t_lo), (-1.0, hi, t_hi)):
                     # Segment extremum (NaN ignored), then the first sample that reaches it.
-                    w = sign * np.where(nan, np.inf, v)
+                    w = np.where(nan, np.inf, sign * v)
                     m = np.minimum.reduceat(w, starts)
                     hits = np.flatnonzero(w == np.repeat(m, lengths))
                     first = hits[np.searchsorted(hits, starts)]
-                    better = sign * m < sign * acc[k, seg]
+                    better = m < sign * acc[k, seg]
                     acc[k, seg[better]] = sign * m[better]
                     acc_t[k, seg[better]] = t[first[better]]
     out = {}
@@ -464,12 +466,18 @@ def new_figure(width=SINGLE_COLUMN_IN, height=2.3, rows=1, sharex=True, **kw):
     return fig, list(axes[:, 0])
 
 
+def legend_above(ax, **kw):
+    """A legend on top of the axes, left-aligned, so that it never hides a curve."""
+    ax.legend(loc="lower left", bbox_to_anchor=(0.0, 1.01), borderaxespad=0.0,
+              columnspacing=1.5, **kw)
+
+
 def need_xaxis(rep):
     if rep.xaxis is None:
         raise Skip("series.time is missing")
 
 
-def draw_vs_motion(rep, ax, channel, ideal=None):
+def draw_vs_motion(rep, ax, channel, ideal=None, legend=True):
     """Plots a channel (full resolution when read) and its ideal twin against the crank angle.
 
     ideal names the twin's channel when it differs (the reaction F of the ideal joint against
@@ -495,7 +503,8 @@ def draw_vs_motion(rep, ax, channel, ideal=None):
     if ideal_v is not None:
         ax.plot(rep.xaxis.of_time(rep.time), ideal_v * scale, label="Ideal joint", zorder=3,
                 **IDEAL_STYLE)
-        ax.legend(loc="best")
+    if legend and ideal_v is not None:
+        legend_above(ax, ncol=2)
     rep.xaxis.apply(ax)
     ax.set_ylabel(axis_label(channel, unit_label))
     return unit_label
@@ -533,7 +542,7 @@ def plan_acceleration_translational(rep):
     def draw():
         fig, axes = new_figure(height=0.4 + 1.9 * len(channels), rows=len(channels))
         for ax, c in zip(axes, channels):
-            draw_vs_motion(rep, ax, c)
+            draw_vs_motion(rep, ax, c, legend=ax is axes[0])
             if ax is not axes[-1]:
                 ax.set_xlabel("")
         fig.align_ylabels(axes)
@@ -675,8 +684,7 @@ def plan_modes(rep):
             if kind in shares:
                 label += f" ({100 * shares[kind]:.1f}%)"
             handles.append(Patch(facecolor=MODE_COLORS[kind], edgecolor="none", label=label))
-        ax.legend(handles=handles, loc="lower left", bbox_to_anchor=(0.0, 1.02), ncol=4,
-                  borderaxespad=0.0, handlelength=1.4)
+        legend_above(ax, handles=handles, ncol=4, handlelength=1.4)
         ax.set_yticks(range(len(rows)))
         ax.set_yticklabels([pretty(j) for j, _, _ in reversed(rows)])
         ax.set_ylim(-0.5, len(rows) - 0.5)
@@ -716,8 +724,9 @@ def plan_impact_velocity(rep):
             ax.set_ylabel("Impacts" if len(hists) == 1 else f"Impacts, {pretty(j).lower()}")
             ax.yaxis.set_major_locator(MaxNLocator(integer=True))
             ax.yaxis.set_minor_locator(NullLocator())
-            ax.set_xlim(min(0.0, float(edges[0])), float(edges[-1]))
             ax.set_ylim(0, float(np.nanmax(counts)) * 1.08)
+        axes[-1].set_xlim(min(0.0, min(float(e[0]) for _, e, _ in hists)),
+                          max(float(e[-1]) for _, e, _ in hists))
         axes[-1].set_xlabel(r"Impact velocity $\dot{\delta}^{-}$ (m/s)")
         return fig
     return [Plan("impact_velocity", "impact_velocity", draw)]
@@ -741,16 +750,19 @@ def plan_poincare(rep):
         ox, _, _, ux = describe(var[0])
         oy, _, _, uy = describe(var[1])
         x, y = pts[:, 0], pts[:, 1]
+        dense = len(pts) > MAX_VECTOR_MARKERS
         eccentricity = ox == oy and var[0].endswith(".ex") and var[1].endswith(".ey")
         if eccentricity:
             c = rep.clearance_of(ox)
-            ax.scatter(x * 1e3, y * 1e3, s=7, color=COLOR_CLEARANCE, linewidths=0, zorder=4)
+            ax.scatter(x * 1e3, y * 1e3, s=7, color=COLOR_CLEARANCE, linewidths=0, zorder=4,
+                       rasterized=dense)
             extent = float(np.nanmax(np.hypot(x, y))) * 1e3
             eccentricity_axes(ax, c * 1e3 if c else None, extent)
         else:
             sx, lx = scaled_unit(ux, float(np.nanmax(np.abs(x))))
             sy, ly = scaled_unit(uy, float(np.nanmax(np.abs(y))))
-            ax.scatter(x * sx, y * sy, s=7, color=COLOR_CLEARANCE, linewidths=0, zorder=4)
+            ax.scatter(x * sx, y * sy, s=7, color=COLOR_CLEARANCE, linewidths=0, zorder=4,
+                       rasterized=dense)
             ax.set_xlabel(axis_label(var[0], lx) if var[0] else "First variable")
             ax.set_ylabel(axis_label(var[1], ly) if var[1] else "Second variable")
         return fig
@@ -827,6 +839,8 @@ def plan_lyapunov(rep):
         h = None
     if h is None or h.ndim != 2 or h.shape[1] < 2 or len(h) < 2:
         raise Skip("no analysis.lyapunov.history")
+    if len(h) > MAX_LINE_POINTS:          # one estimate per renormalisation can be many
+        h = h[np.unique(np.linspace(0, len(h) - 1, MAX_LINE_POINTS).astype(int))]
 
     def draw():
         fig, (ax,) = new_figure()
@@ -839,7 +853,7 @@ def plan_lyapunov(rep):
         if isinstance(final, (int, float)) and math.isfinite(final):
             ax.axhline(final, color="black", linewidth=0.6, linestyle=":",
                        label=rf"$\lambda_1$ = {final:.3g} {unit}")
-            ax.legend(loc="best")
+            legend_above(ax, ncol=2)
         ax.set_xlim(0.0 if h[0, 0] >= 0 else h[0, 0] * scale, snap(h[-1, 0] * scale))
         ax.set_xlabel(t_label)
         ax.set_ylabel(rf"Largest Lyapunov exponent $\lambda_1$ ({unit})")
@@ -887,8 +901,7 @@ def plan_energy(rep):
             axes[0].plot(t, rep.channel("energy." + k) * scale, color=ENERGY_COLORS[k],
                          linewidth=0.8, label=pretty(QUANTITIES[k][0]))
         axes[0].set_ylabel(f"Energy ({unit})")
-        axes[0].legend(loc="lower left", bbox_to_anchor=(0.0, 1.01), ncol=2,
-                       borderaxespad=0.0, columnspacing=1.2)
+        legend_above(axes[0], ncol=2)
         if balance is not None:
             drift = balance - balance[0]
             s, u = scaled_unit("J", float(np.nanmax(np.abs(drift))) or 1.0)
@@ -953,9 +966,12 @@ def parse_args(argv):
     p.add_argument("--format", default="png,svg",
                    help=f"comma-separated formats among {', '.join(FORMATS)} (default png,svg)")
     p.add_argument("--only", nargs="+", metavar="NAME",
-                   help="draw only these figures: family names or file names without extension")
+                   help="draw only these figures: family names or file names without extension "
+                        "(space- or comma-separated)")
     a = p.parse_args(argv)
     a.formats = [f.strip().lower() for f in a.format.split(",") if f.strip()]
+    if a.only:
+        a.only = [n.strip() for item in a.only for n in item.split(",") if n.strip()]
     bad = [f for f in a.formats if f not in FORMATS]
     if bad or not a.formats:
         p.error(f"--format: unknown format {', '.join(bad) or '(none)'}; "

@@ -105,6 +105,10 @@ int main(int argc, char** argv) {
   analyze->add_option("--fft", fft_channels, "Amplitude spectrum of these channels, e.g. slider.ax")
       ->take_all();
   analyze->add_flag("--lyapunov", lyapunov, "Largest Lyapunov exponent (two trajectories)");
+  std::vector<std::string> planes;
+  analyze->add_option("--plane", planes,
+                      "Event-based Poincaré section instead of the stroboscopic one: "
+                      "<body>.<x|y|phi|vx|vy|omega>=VALUE[,down], e.g. slider.vx=0,down");
   analyze->add_option("--discard", discard_periods, "Transient periods to discard (default 1)");
   double lyapunov_d0 = 0.0;
   analyze->add_option("--lyapunov-d0", lyapunov_d0,
@@ -159,6 +163,7 @@ int main(int argc, char** argv) {
       ro.poincare_driver = poincare_driver;
       ro.fft_channels = fft_channels;
       ro.lyapunov_d0 = lyapunov_d0;
+      ro.section_planes = planes;
     }
     try {
       ProgressObserver progress(nullptr, isatty(STDERR_FILENO));
@@ -170,8 +175,8 @@ int main(int argc, char** argv) {
       const auto& an = rr.data["analysis"];
       std::ofstream(run_dir + "/analysis.json") << an.dump(2) << "\n";
       if (an["poincare"].is_object())
-        fmt::print("poincare: {} sections every {:.6g} s, {} distinct point(s)\n",
-                   an["poincare"]["points"].size(), an["poincare"]["period"].get<double>(),
+        fmt::print("poincare ({}): {} sections, {} distinct point(s)\n",
+                   an["poincare"]["kind"].get<std::string>(), an["poincare"]["points"].size(),
                    an["poincare"]["distinct"].get<int>());
       for (const auto& [name, sp] : an["spectra"].items()) {
         // The three strongest local maxima.

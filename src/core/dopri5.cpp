@@ -194,13 +194,15 @@ class Dopri5 final : public Integrator {
     if (p_.n_events == 0) return;
     p_.events(t_, y_.data(), g_new_.data());
     double best = std::numeric_limits<double>::infinity();
+    int best_k = -1;
     for (int k = 0; k < p_.n_events; ++k) {
       double ta = t_old_, ga = g_old_[k];
       for (int s = 1; s <= 4; ++s) {
         const double tb = s == 4 ? t_ : t_old_ + 0.25 * s * h_step_;
         const double gb = s == 4 ? g_new_[k] : g_at(k, tb);
         if (ga <= 0.0 && gb > 0.0) {
-          best = std::min(best, bracket(k, ta, ga, tb, gb));
+          const double tk = bracket(k, ta, ga, tb, gb);
+          if (tk < best) best = tk, best_k = k;
           break;
         }
         ta = tb;
@@ -209,51 +211,69 @@ class Dopri5 final : public Integrator {
     }
     g_old_ = g_new_;
     if (std::isfinite(best)) {
-      redo_step_to(best);
-      pending_event_ = true;
       t_event_ = best;
+      pending_event_ = true;
+      redo_step_to(best, best_k);  // may move t_event_ just past the redone crossing
     }
   }
 
   /// Recomputes the accepted step so it ends at the located event t_e: stages past the crossing
   /// already felt the new contact state and would bias the state read at the crossing (δ̇⁻).
-  void redo_step_to(double t_e) {
-    const double h = t_e - t_old_;
-    if (!(h > 0.0)) return;
-    y_ = r1_;
-    k1_ = k1_prev_;
-    bool ok = true;
-    yt_ = y_ + h * a21 * k1_;
-    ok = ok && f(t_old_ + c2 * h, yt_, k2_);
-    if (ok) { yt_ = y_ + h * (a31 * k1_ + a32 * k2_); ok = f(t_old_ + c3 * h, yt_, k3_); }
-    if (ok) { yt_ = y_ + h * (a41 * k1_ + a42 * k2_ + a43 * k3_); ok = f(t_old_ + c4 * h, yt_, k4_); }
-    if (ok) {
-      yt_ = y_ + h * (a51 * k1_ + a52 * k2_ + a53 * k3_ + a54 * k4_);
-      ok = f(t_old_ + c5 * h, yt_, k5_);
-    }
-    if (ok) {
-      yt_ = y_ + h * (a61 * k1_ + a62 * k2_ + a63 * k3_ + a64 * k4_ + a65 * k5_);
-      ok = f(t_old_ + h, yt_, k6_);
-    }
-    if (ok) {
-      ynew_ = y_ + h * (a71 * k1_ + a73 * k3_ + a74 * k4_ + a75 * k5_ + a76 * k6_);
-      ok = f(t_old_ + h, ynew_, k7_);
-    }
-    if (!ok) {  // keep the interpolated state of the original step
+  /// The redone state must lie past the crossing too (g_k > 0); at a grazing crossing it may not,
+  /// and then the original step's dense output at t_e, which does by construction, is kept.
+  void redo_step_to(double t_e, int k) {
+    auto keep_dense = [&]() {
       dense(t_e, ye_);
       y_ = ye_;
       t_ = t_e;
       need_k1_ = true;
-      return;
+    };
+    // The redone trajectory crosses slightly apart from the dense output it was located on:
+    // step past its own crossing with a secant estimate (at most three tries).
+    double slope = 0.0;
+    if (k >= 0) {
+      const double dt = 1e-3 * h_step_;
+      slope = (g_at(k, t_e) - g_at(k, t_e - dt)) / dt;
     }
-    r2_ = ynew_ - y_;
-    r3_ = h * k1_ - r2_;
+    double t_try = t_e;
+    for (int attempt = 0; attempt < 4; ++attempt) {
+      const double h = t_try - t_old_;
+      if (!(h > 0.0) || t_try > t_old_ + h_step_) return keep_dense();
+      if (!stages_from_start(h)) return keep_dense();
+      if (k < 0) break;
+      p_.events(t_try, ynew_.data(), g_tmp_.data());
+      if (g_tmp_[k] > 0.0) break;
+      if (attempt == 3 || !(slope > 0.0)) return keep_dense();
+      t_try += std::max(2.0 * -g_tmp_[k] / slope,
+                        8 * std::numeric_limits<double>::epsilon() * std::abs(t_try));
+    }
+    const double h = t_try - t_old_;
+    r2_ = ynew_ - r1_;
+    r3_ = h * k1_prev_ - r2_;
     r4_ = r2_ - h * k7_ - r3_;
-    r5_ = h * (d1 * k1_ + d3 * k3_ + d4 * k4_ + d5 * k5_ + d6 * k6_ + d7 * k7_);
+    r5_ = h * (d1 * k1_prev_ + d3 * k3_ + d4 * k4_ + d5 * k5_ + d6 * k6_ + d7 * k7_);
     h_step_ = h;
-    t_ = t_e;
+    t_ = t_try;
+    t_event_ = t_try;
     y_ = ynew_;
     k1_ = k7_;
+  }
+
+  /// The stages of a step of size h from the last step's start (r1_, k1_prev_) into ynew_, k7_.
+  bool stages_from_start(double h) {
+    const Eigen::VectorXd& y0 = r1_;
+    yt_ = y0 + h * a21 * k1_prev_;
+    if (!f(t_old_ + c2 * h, yt_, k2_)) return false;
+    yt_ = y0 + h * (a31 * k1_prev_ + a32 * k2_);
+    if (!f(t_old_ + c3 * h, yt_, k3_)) return false;
+    yt_ = y0 + h * (a41 * k1_prev_ + a42 * k2_ + a43 * k3_);
+    if (!f(t_old_ + c4 * h, yt_, k4_)) return false;
+    yt_ = y0 + h * (a51 * k1_prev_ + a52 * k2_ + a53 * k3_ + a54 * k4_);
+    if (!f(t_old_ + c5 * h, yt_, k5_)) return false;
+    yt_ = y0 + h * (a61 * k1_prev_ + a62 * k2_ + a63 * k3_ + a64 * k4_ + a65 * k5_);
+    if (!f(t_old_ + h, yt_, k6_)) return false;
+    ynew_ = y0 + h * (a71 * k1_prev_ + a73 * k3_ + a74 * k4_ + a75 * k5_ + a76 * k6_);
+    return f(t_old_ + h, ynew_, k7_);
   }
 
   double bracket(int k, double a, double ga, double b, double gb) {

@@ -77,6 +77,7 @@ struct Workspace {
   double kinetic = 0.0, potential = 0.0, dissipated_power = 0.0, input_power = 0.0;
   double constraint_violation = 0.0;  ///< max |Φ|, m or rad
   long rhs_evaluations = 0;
+  long missed_events = 0;  ///< crossings found only by the mode/gap consistency check
 };
 
 /// Evaluates ẏ = f(t, y); fills the workspace's outputs (λ, contact quantities, energies).

@@ -9,6 +9,9 @@ namespace lash {
 
 namespace {
 
+/// A gap beyond this (m) on the wrong side of a joint's mode is a missed crossing.
+constexpr double kModeTolerance = 1e-12;
+
 std::string describe_contacts(const Model& model, const Workspace& ws) {
   std::ostringstream s;
   for (int k = 0; k < ws.nc; ++k) {
@@ -40,23 +43,26 @@ bool journal_through_bearing(const Model& model, const Workspace& ws, RunStatus&
 
 }  // namespace
 
-Simulator::Simulator(const Model& model, Workspace& ws) : model_(model), ws_(ws) {
+Simulator::Simulator(const Model& model, Workspace& ws, std::vector<SectionPlane> planes)
+    : model_(model), ws_(ws), planes_(std::move(planes)) {
   const SolverSettings& s = model.solver;
   OdeProblem problem;
   problem.n = ws.ny;
-  problem.n_events = ws.nc;
+  problem.n_events = ws.nc + static_cast<int>(planes_.size());
   problem.rhs = [this](double t, const double* yy, double* dy) {
     return evaluate(model_, ws_, t, yy, dy);
   };
   problem.events = [this](double, const double* yy, double* g) {
     event_functions(model_, ws_, yy, g);
+    for (size_t p = 0; p < planes_.size(); ++p)
+      g[ws_.nc + p] = planes_[p].direction * (yy[planes_[p].index] - planes_[p].value);
   };
   IntegratorOptions opt{s.rtol, s.atol, s.max_step, s.max_steps};
   integrator_ = s.integrator == IntegratorKind::bdf ? make_cvode_bdf(problem, opt)
                                                     : make_dopri5(problem, opt);
   y_.resize(ws.ny);
   ydot_.resize(ws.ny);
-  g_event_.resize(ws.nc);
+  g_event_.resize(ws.nc + planes_.size());
 }
 
 Simulator::~Simulator() = default;
@@ -93,14 +99,41 @@ bool Simulator::advance_to(double t_target, Observer* observer) {
     }
     if (adv.kind == Advance::reached) {
       t_ = t_target;
+      // Safety net: a crossing no event function saw (entered and left within one step, or lost
+      // at a grazing restart) leaves a mode that contradicts its gap. Correct it here and say so.
+      bool fixed = false;
+      for (int c = 0; c < ws_.nc; ++c) {
+        double delta, delta_dot;
+        clearance_gap(model_, ws_, c, y_.data(), delta, delta_dot);
+        ContactState& cs = ws_.contact[c];
+        if ((cs.in_contact && delta < -kModeTolerance) || (!cs.in_contact && delta > kModeTolerance)) {
+          cs.in_contact = !cs.in_contact;
+          if (cs.in_contact) cs.impact_velocity = std::max(delta_dot, 0.0);
+          ++ws_.missed_events;
+          if (observer) observer->event({t_, c, cs.in_contact, delta_dot}, ws_);
+          fixed = true;
+        }
+      }
+      if (fixed) integrator_->reset(t_, y_);
       return true;
     }
-    // The integrator located g_k = s_k δ_k rising through zero: flip every joint now on the
-    // far side (g_k ≥ 0); at round-off (δ = ±1e-17) trust the largest g_k. Read δ̇⁻ here.
+    // The integrator located an event function rising through zero. A plane crossing is a
+    // Poincaré section; a contact event flips every joint now on the far side (g_k ≥ 0), and at
+    // round-off (δ = ±1e-17) the joint with the largest g_k. δ̇⁻ is read here.
     event_functions(model_, ws_, y_.data(), g_event_.data());
+    for (size_t p = 0; p < planes_.size(); ++p)
+      g_event_[ws_.nc + p] = planes_[p].direction * (y_[planes_[p].index] - planes_[p].value);
     int first = 0;
-    for (int c = 1; c < ws_.nc; ++c)
+    for (int c = 1; c < g_event_.size(); ++c)
       if (g_event_[c] > g_event_[first]) first = c;
+    if (first >= ws_.nc) {
+      if (observer) {
+        evaluate(model_, ws_, adv.t, y_.data(), ydot_.data());
+        observer->section(adv.t, y_, ws_);
+      }
+      integrator_->reset(adv.t, y_);
+      continue;
+    }
     for (int c = 0; c < ws_.nc; ++c) {
       if (!(g_event_[c] >= 0.0 || c == first)) continue;
       double delta, delta_dot;
@@ -115,14 +148,53 @@ bool Simulator::advance_to(double t_target, Observer* observer) {
   return true;
 }
 
+SectionPlane parse_section_plane(const Model& model, const std::string& spec) {
+  static const char* fields[6] = {"x", "y", "phi", "vx", "vy", "omega"};
+  const auto eq = spec.find('=');
+  const auto dot = spec.find('.');
+  if (eq == std::string::npos || dot == std::string::npos || dot > eq)
+    throw std::invalid_argument("section plane '" + spec +
+                                "': expected <body>.<x|y|phi|vx|vy|omega>=VALUE[,down]");
+  const std::string body = spec.substr(0, dot), field = spec.substr(dot + 1, eq - dot - 1);
+  std::string value = spec.substr(eq + 1);
+  SectionPlane p;
+  if (const auto comma = value.find(','); comma != std::string::npos) {
+    const std::string dir = value.substr(comma + 1);
+    if (dir != "up" && dir != "down")
+      throw std::invalid_argument("section plane '" + spec + "': direction must be up or down");
+    p.direction = dir == "down" ? -1 : 1;
+    value = value.substr(0, comma);
+  }
+  int b = -1;
+  for (size_t i = 0; i < model.bodies.size(); ++i)
+    if (model.bodies[i].name == body) b = static_cast<int>(i);
+  int f = -1;
+  for (int i = 0; i < 6; ++i)
+    if (field == fields[i]) f = i;
+  if (b < 0 || f < 0)
+    throw std::invalid_argument("section plane '" + spec + "': no body '" + body +
+                                "' or no quantity '" + field + "' (x, y, phi, vx, vy, omega)");
+  try {
+    size_t used = 0;
+    p.value = std::stod(value, &used);
+    if (used != value.size()) throw std::invalid_argument(value);
+  } catch (const std::exception&) {
+    throw std::invalid_argument("section plane '" + spec + "': value '" + value +
+                                "' is not a number");
+  }
+  const int nq = 3 * static_cast<int>(model.bodies.size());
+  p.index = f < 3 ? 3 * b + f : nq + 3 * b + (f - 3);
+  return p;
+}
+
 RunResult simulate(const Model& model, Workspace& ws, Observer& observer,
-                   const SectionSchedule& sections) {
+                   const SectionSchedule& sections, const std::vector<SectionPlane>& planes) {
   const auto wall0 = std::chrono::steady_clock::now();
   const SolverSettings& s = model.solver;
   RunResult result;
   Eigen::VectorXd y = initial_state(model, ws);
   Eigen::VectorXd ydot(ws.ny);
-  Simulator sim(model, ws);
+  Simulator sim(model, ws, planes);
   result.integrator = sim.integrator_name();
   sim.start(0.0, y);
 
@@ -187,6 +259,7 @@ RunResult simulate(const Model& model, Workspace& ws, Observer& observer,
     ++k;
   }
   result.stats = sim.stats();
+  result.missed_events = ws.missed_events;
   result.wall_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   return result;

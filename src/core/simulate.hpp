@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "core/dynamics.hpp"
 #include "core/integrator.hpp"
@@ -41,6 +42,14 @@ struct SectionSchedule {
   double start = 0.0;
 };
 
+/// An event-based Poincaré section: the plane y[index] = value in state space, crossed upwards
+/// (direction +1) or downwards (−1), located by the integrator's root finding.
+struct SectionPlane {
+  int index = 0;       ///< into the ODE state y (q then q̇)
+  double value = 0.0;
+  int direction = 1;
+};
+
 struct RunStatus {
   bool ok = true;
   double t = 0.0;
@@ -55,18 +64,20 @@ struct RunResult {
   double wall_seconds = 0.0;
   double max_constraint_violation = 0.0;
   long outputs = 0;
+  long missed_events = 0;  ///< mode corrections at outputs (crossings no event function saw)
 };
 
 /// Integrates one model forward with its contact events, from a state the caller sets: the
 /// building block of simulate() and of analyses that restart from modified states (Lyapunov).
 class Simulator {
  public:
-  Simulator(const Model& model, Workspace& ws);
+  Simulator(const Model& model, Workspace& ws, std::vector<SectionPlane> planes = {});
   ~Simulator();
   /// Starts from y at time t; each joint's mode follows the sign of its gap (δ̇⁻ = |δ̇| if in
   /// contact), or `modes` (e.g. a nearby trajectory's) where they agree with that sign.
   void start(double t, const Eigen::VectorXd& y, const std::vector<ContactState>* modes = nullptr);
-  /// Integrates to t_target, handling contact events (reported to `observer` when given).
+  /// Integrates to t_target, handling contact events and plane crossings (reported to
+  /// `observer` when given: event() and section()).
   /// Returns false on a numerical failure; status() says what happened.
   bool advance_to(double t_target, Observer* observer);
   double time() const { return t_; }
@@ -78,6 +89,7 @@ class Simulator {
  private:
   const Model& model_;
   Workspace& ws_;
+  std::vector<SectionPlane> planes_;
   std::unique_ptr<Integrator> integrator_;
   Eigen::VectorXd y_, g_event_, ydot_;
   double t_ = 0.0;
@@ -87,6 +99,11 @@ class Simulator {
 /// Runs the model's solver settings from the initial-state rule to end_time.
 /// Throws std::runtime_error only when no consistent initial state exists.
 RunResult simulate(const Model& model, Workspace& ws, Observer& observer,
-                   const SectionSchedule& sections = {});
+                   const SectionSchedule& sections = {},
+                   const std::vector<SectionPlane>& planes = {});
+
+/// Parses "<body>.<x|y|phi|vx|vy|omega>=VALUE[,down]" into a plane; throws
+/// std::invalid_argument naming what is wrong.
+SectionPlane parse_section_plane(const Model& model, const std::string& spec);
 
 }  // namespace lash

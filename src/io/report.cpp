@@ -177,6 +177,7 @@ class Collector : public Observer {
         p.push_back(std::sin(y[3 * b + 2]) * 1e-2);
       }
     sections.push_back(std::move(p));
+    section_t.push_back(t);
   }
 
   const Model& model_;
@@ -196,6 +197,7 @@ class Collector : public Observer {
   std::vector<std::vector<Vec2>> orbit;
   std::vector<JointEvents> events;
   std::vector<std::vector<double>> sections;
+  std::vector<double> section_t;
   Eigen::VectorXd lyapunov_start;
   double lyapunov_t0 = 0.0;
   bool have_lyapunov_start = false;
@@ -341,7 +343,9 @@ ReportRun run_with_analysis(const LoadedModel& loaded, const ReportOptions& o,
   col.fft_data.resize(col.fft_index.size());
 
   ReportRun out;
-  out.result = simulate(model, ws, col, SectionSchedule{period, 0.0});
+  std::vector<SectionPlane> planes;
+  for (const auto& spec : o.section_planes) planes.push_back(parse_section_plane(model, spec));
+  out.result = simulate(model, ws, col, SectionSchedule{planes.empty() ? period : 0.0, 0.0}, planes);
   col.dec.flush();
 
   json d;
@@ -474,7 +478,7 @@ ReportRun run_with_analysis(const LoadedModel& loaded, const ReportOptions& o,
     tol = c == 0 ? 0.01 * model.joints[ws.clearance_joints[c]].clearance->clearance
                  : std::min(tol, 0.01 * model.joints[ws.clearance_joints[c]].clearance->clearance);
   const int distinct = count_distinct(col.sections, tol);
-  if (period > 0) {
+  if (period > 0 || !planes.empty()) {
     json pts = json::array();
     for (const auto& p : col.sections)
       pts.push_back(std::vector<double>(p.begin(), p.begin() + std::min<size_t>(2, p.size())));
@@ -485,9 +489,12 @@ ReportRun run_with_analysis(const LoadedModel& loaded, const ReportOptions& o,
     } else {
       vars = {model.bodies[0].name + ".x", model.bodies[0].name + ".y"};
     }
-    an["poincare"] = {{"kind", "stroboscopic"}, {"period", period},
+    an["poincare"] = {{"kind", planes.empty() ? "stroboscopic" : "event"},
+                      {"plane", planes.empty() ? json(nullptr) : json(o.section_planes)},
+                      {"period", period},
                       {"discarded_periods", o.discard_periods}, {"variables", vars},
-                      {"points", pts}, {"distinct", distinct}, {"tolerance", tol}};
+                      {"points", pts}, {"times", r6(col.section_t)}, {"distinct", distinct},
+                      {"tolerance", tol}};
   } else {
     an["poincare"] = nullptr;
   }

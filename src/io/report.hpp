@@ -20,6 +20,8 @@ struct ReportOptions {
   bool lyapunov = true;             ///< estimate the largest Lyapunov exponent
   double lyapunov_d0 = 0.0;         ///< separation, m (0: 2e-4 × the smallest clearance, ≤ 1e-7)
   std::string poincare_driver;      ///< driver whose period sets the sections ("" = first rotary)
+  /// Event-based sections instead of stroboscopic ones: "<body>.<x|y|phi|vx|vy|omega>=V[,down]".
+  std::vector<std::string> section_planes;
   int discard_periods = 1;          ///< transient periods skipped by sections, spectra, Lyapunov
   std::vector<std::string> fft_channels;   ///< default: translational bodies' ax, each Fn
   std::vector<std::pair<std::string, std::string>> phase;  ///< default: each joint's (ex, ey)

@@ -185,6 +185,7 @@ void ResultsWriter::finish(const RunResult& r, const std::string& resolved_yaml,
                      {"wall_seconds", r.wall_seconds},
                      {"outputs", r.outputs}};
   j["max_constraint_violation"] = r.max_constraint_violation;
+  j["integrator"]["missed_events"] = r.missed_events;
   const SolverSettings& s = model_.solver;
   j["model"] = {{"name", model_.name},
                 {"file", model_.source},

@@ -73,6 +73,11 @@ def load_model_yaml(run_dir):
         return yaml.safe_load(f)
 
 
+def number(v):
+    """A YAML scalar as a float (PyYAML reads '2e-4', without a dot, as a string); None stays."""
+    return None if v is None else float(v)
+
+
 def split_point(ref):
     """'rod.B' -> ('rod', 'B')."""
     body, _, marker = str(ref).partition(".")
@@ -100,7 +105,8 @@ def model_section(model, header, run_dir):
         }
     bodies = []
     for name, b in (model.get("bodies") or {}).items():
-        bodies.append({"name": name, "mass": b.get("mass"), "inertia": b.get("inertia"),
+        bodies.append({"name": name, "mass": number(b.get("mass")),
+                       "inertia": number(b.get("inertia")),
                        "markers": b.get("markers", {})})
     markers = {name: b.get("markers", {}) for name, b in (model.get("bodies") or {}).items()}
     markers["ground"] = (model.get("ground") or {}).get("markers", {})
@@ -121,7 +127,8 @@ def model_section(model, header, run_dir):
         c = j.get("clearance", None)
         if kind == "revolute" and (c or j.get("bearing_radius")):
             merged = dict(defaults, **j)
-            rj, rb = merged.get("journal_radius"), merged.get("bearing_radius")
+            c = number(c)
+            rj, rb = number(merged.get("journal_radius")), number(merged.get("bearing_radius"))
             if c is not None and rj is not None:
                 rb = rj + c
             elif c is not None and rb is not None:
@@ -135,9 +142,9 @@ def model_section(model, header, run_dir):
         joints.append(entry)
     drivers = []
     for name, d in (model.get("drivers") or {}).items():
-        speed = d.get("speed")
+        speed = number(d.get("speed"))
         if "speed_rpm" in d:
-            speed = d["speed_rpm"] * 2.0 * math.pi / 60.0
+            speed = number(d["speed_rpm"]) * 2.0 * math.pi / 60.0
         drivers.append({"name": name, "joint": d.get("joint"), "speed": speed,
                         "profile": "constant_speed" if speed is not None else "motion"})
     return {"name": model.get("name", "model"), "file": "", "bodies": bodies,
@@ -339,7 +346,7 @@ def build(run_dir, ideal_dir=None, period=0.012, max_points=MAX_SERIES_POINTS):
             phase.append({"x": b + ".x", "y": b + ".vx"})
 
     # A fake running estimate that settles like the real one would: marked as a stand-in.
-    interval = period / 100.0
+    interval = max(period / 100.0, float(time[-1] - time[0]) / max_points)
     t_l = np.arange(interval, time[-1] + 0.5 * interval, interval)
     lam = 12.0
     hist = lam + 80.0 * np.exp(-t_l / (2.0 * period)) * np.cos(2 * math.pi * t_l / period) \
