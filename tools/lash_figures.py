@@ -63,7 +63,6 @@ MODE_COLORS = {"free_flight": "0.88", "impact": VERMILION, "continuous": BLUE, "
 MODE_LABELS = {"free_flight": "Free flight", "impact": "Impact", "continuous": "Continuous contact",
                "contact": "Contact"}
 ENERGY_COLORS = {"kinetic": BLUE, "potential": GREEN, "dissipated": VERMILION, "input": ORANGE}
-SERIES_COLORS = (BLUE, VERMILION, GREEN, ORANGE, PURPLE, SKY)
 
 STYLE = {
     "font.family": "serif",
@@ -183,8 +182,8 @@ def read_envelopes(csv_path, columns, t0, t1, buckets=ENVELOPE_BUCKETS):
     """Min/max envelopes of the named columns of timeseries.csv over [t0, t1], in one pass.
 
     Parses about CSV_CHUNK_BYTES of whole lines at a time with numpy.loadtxt(usecols=...), so
-    memory is that of one chunk plus 4 x buckets values per column, whatever the number of rows. Returns {name: Envelope} for the
-    columns the file has; raises ValueError on a malformed file.
+    memory is that of one chunk plus 4 x buckets values per column, whatever the number of rows.
+    Returns {name: Envelope} for the columns the file has; raises ValueError on a malformed file.
     """
     import numpy as np
     with open(csv_path, "rb") as f:
@@ -407,10 +406,10 @@ class Report:
 # Labels and units
 
 
-def scaled_unit(unit, peak, prefer=None):
+def scaled_unit(unit, peak):
     """(factor, unit label) that brings values of this peak to readable numbers."""
     if unit == "m":
-        if prefer == "mm" or 1e-4 <= peak < 1.0:
+        if 1e-4 <= peak < 1.0:
             return 1e3, "mm"
         return (1e6, "µm") if 0 < peak < 1e-4 else (1.0, "m")
     if unit in ("N", "N·m", "J"):
@@ -442,9 +441,10 @@ def pretty(name):
     return s[:1].upper() + s[1:]
 
 
-def axis_label(channel, unit_label, with_owner=True):
+def axis_label(channel, unit_label):
+    """'Slider acceleration $a_x$ (10³ m/s²)' for 'slider.ax' in the given unit."""
     owner, desc, symbol, _ = describe(channel)
-    text = f"{pretty(owner)} {desc}" if with_owner and owner and owner != "energy" else pretty(desc)
+    text = f"{pretty(owner)} {desc}" if owner and owner != "energy" else pretty(desc)
     if symbol:
         text += f" {symbol}"
     return f"{text} ({unit_label})" if unit_label else text

@@ -18,7 +18,6 @@ import os
 import shutil
 import struct
 import subprocess
-import sys
 import tempfile
 import unittest
 import xml.etree.ElementTree as ET
@@ -51,7 +50,8 @@ gravity: [0, -9.81]
 ground:
   markers: {O: [0, 0]}
 bodies:
-  crank: {mass: 0.3, inertia: 1.0e-4, position: [0.025, 0], markers: {O: [-0.025, 0], A: [0.025, 0]}}
+  crank: {mass: 0.3, inertia: 1.0e-4, position: [0.025, 0],
+          markers: {O: [-0.025, 0], A: [0.025, 0]}}
   rod: {mass: 0.21, inertia: 2.5e-4, position: [0.11, 0], markers: {A: [-0.06, 0], B: [0.06, 0]}}
   slider: {mass: 0.14, inertia: 1.0e-4, position: [0.17, 0], markers: {O: [0, 0]}}
 clearance_defaults: {journal_radius: 9.5e-3, normal_law: lankarani_nikravesh, friction: {law: none}}
