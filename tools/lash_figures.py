@@ -817,6 +817,16 @@ def plan_phase(rep):
             continue
 
         def draw(cx=cx, cy=cy, x=x, y=y):
+            owner = describe(cx)[0]
+            if cx == owner + ".ex" and cy == owner + ".ey":
+                # The journal path: square, in mm, with the clearance circle, like the orbit.
+                fig, (ax,) = new_figure(width=2.8, height=2.8)
+                ax.plot(x * 1e3, y * 1e3, color=COLOR_CLEARANCE, linewidth=0.5, zorder=2)
+                c = rep.clearance_of(owner)
+                eccentricity_axes(ax, c * 1e3 if c else None,
+                                  float(np.nanmax(np.hypot(x, y))) * 1e3,
+                                  axis_label(cx, "mm"), axis_label(cy, "mm"))
+                return fig
             fig, (ax,) = new_figure(width=SINGLE_COLUMN_IN, height=2.6)
             sx, lx = scaled_unit(describe(cx)[3], float(np.nanmax(np.abs(x))))
             sy, ly = scaled_unit(describe(cy)[3], float(np.nanmax(np.abs(y))))

@@ -28,14 +28,14 @@ Spectrum amplitude_spectrum(const std::vector<double>& x, double dt, Window wind
   double mean = 0;
   for (double v : x) mean += v;
   mean /= n;
-  std::vector<double> in(n), w(n, 1.0);
-  if (window == Window::hann)
-    for (size_t i = 0; i < n; ++i) w[i] = 0.5 - 0.5 * std::cos(2 * M_PI * i / n);  // periodic Hann
+  std::vector<double> in(n);
   double sw = 0, sw2 = 0;
   for (size_t i = 0; i < n; ++i) {
-    in[i] = (x[i] - mean) * w[i];
-    sw += w[i];
-    sw2 += w[i] * w[i];
+    // Periodic Hann window, computed on the fly (no second n-sized array).
+    const double w = window == Window::hann ? 0.5 - 0.5 * std::cos(2 * M_PI * i / n) : 1.0;
+    in[i] = (x[i] - mean) * w;
+    sw += w;
+    sw2 += w * w;
   }
   const size_t nf = n / 2 + 1;
   fftw_complex* out = fftw_alloc_complex(nf);

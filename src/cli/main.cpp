@@ -229,11 +229,12 @@ int main(int argc, char** argv) {
       return 2;
     }
     writer.finish(result, loaded.resolved_yaml, overrides);
-    if (with_report) {
-      for (const auto& line : lash::write_report(rr.data, out_dir))
-        if (!quiet) std::cout << "report: " << line << "\n";
-    }
+
+    // The report covers what was computed, up to a failure too.
+    std::vector<std::string> report_notes;
+    if (with_report) report_notes = lash::write_report(rr.data, out_dir);
     if (!result.status.ok) {
+      for (const auto& line : report_notes) std::cerr << "report: " << line << "\n";
       std::cerr << "\nerror: simulation stopped at t = " << result.status.t << " s"
                 << (result.status.element.empty() ? "" : ", joint '" + result.status.element + "'")
                 << ": " << result.status.message << "\nresults up to that time are in " << out_dir
@@ -246,6 +247,8 @@ int main(int argc, char** argv) {
                  model.name, result.outputs, out_dir, result.wall_seconds, result.stats.steps,
                  result.stats.rejected_steps, result.stats.rhs_evaluations, result.stats.events,
                  result.max_constraint_violation);
+    for (const auto& line : report_notes)
+      if (!quiet) std::cout << "report: " << line << "\n";
   } catch (const std::exception& e) {
     std::cerr << "error: " << e.what() << "\n";
     return 1;

@@ -11,11 +11,12 @@ figure tests, this script makes a realistic sample from what `lash run` already 
 * frames      bodies (x, y, φ) and journal eccentricities at <= 600 instants.
 * analysis    statistics and comparison per channel (full resolution); per clearance joint the
               orbit (ex, ey), contact episodes from events.csv (an episode shorter than
-              --impact-duration is an impact, a longer one continuous contact), the onset
+              IMPACT_DURATION_S is an impact, a longer one continuous contact), the onset
               velocities and their histogram; a stroboscopic Poincaré section of (ex, ey) once per
               --period after the first; Hann-windowed amplitude spectra of the peak body
-              acceleration after the first period; phase pairs (δ, δ̇) per clearance joint and
-              (x, vx) per translational body; a *fake* Lyapunov history (marked "stand-in").
+              acceleration after the first period; phase pairs (e_x, e_y) and (δ, δ̇) per
+              clearance joint and (x, vx) per translational body; a *fake* Lyapunov history
+              (marked "stand-in").
 
 Only the standard library and numpy are needed; the model section uses PyYAML (Debian's
 python3-yaml) on model_resolved.yaml when it is installed and is inferred from the column names
@@ -339,6 +340,7 @@ def build(run_dir, ideal_dir=None, period=0.012, max_points=MAX_SERIES_POINTS):
 
     phase = []
     for j in clearance_joints:
+        phase.append({"x": j["name"] + ".ex", "y": j["name"] + ".ey"})
         if col(j["name"] + ".delta") is not None and col(j["name"] + ".delta_dot") is not None:
             phase.append({"x": j["name"] + ".delta", "y": j["name"] + ".delta_dot"})
     for b in translational_bodies(model, col):

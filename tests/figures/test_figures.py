@@ -42,6 +42,7 @@ IMPACTS = [(0.8e-3, 0.86e-3, 3.1), (2.0e-3, 2.05e-3, 1.7), (3.0e-3, 6.5e-3, 0.9)
 
 EXPECTED = ["acceleration_peak", "acceleration_translational", "contact_force_rod_slider",
             "orbit_rod_slider", "modes", "impact_velocity", "poincare", "spectra",
+            "phase_rod_slider-ex_vs_rod_slider-ey",
             "phase_rod_slider-delta_vs_rod_slider-delta_dot", "phase_slider-x_vs_slider-vx",
             "lyapunov", "driver_torque_crank", "energy"]
 
