@@ -19,9 +19,9 @@ struct Result {
   std::string out;
 };
 
-/// Runs `lash ARGS` with stdout and stderr captured together.
-Result run_lash(const std::string& args) {
-  const std::string cmd = std::string(LASH_BINARY) + " " + args + " 2>&1";
+/// Runs a shell command with stdout and stderr captured together.
+Result run_lash_raw(const std::string& command) {
+  const std::string cmd = command + " 2>&1";
   FILE* p = popen(cmd.c_str(), "r");
   std::string out;
   char buf[4096];
@@ -29,6 +29,9 @@ Result run_lash(const std::string& args) {
   const int status = pclose(p);
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
 }
+
+/// Runs `lash ARGS`.
+Result run_lash(const std::string& args) { return run_lash_raw(std::string(LASH_BINARY) + " " + args); }
 
 std::string example() { return lash::test::example_path("flores_slider_crank.yaml"); }
 
@@ -144,5 +147,50 @@ TEST(Cli, NumericalFailureKeepsResultsAndExitsOne) {
   const auto j = nlohmann::json::parse(std::ifstream(dir / "summary.json"));
   EXPECT_FALSE(j["status"]["ok"].get<bool>());
   EXPECT_EQ(j["status"]["element"], "rod_slider");
+  fs::remove_all(dir);
+}
+
+TEST(Cli, ProgressLineOnATerminal) {
+  // `script` gives the run a pseudo-terminal: the progress line (simulated time, percent, rate)
+  // must appear there, and only there (RunWritesTheResultFiles checks its absence in a pipe).
+  if (std::system("command -v script > /dev/null 2>&1") != 0) GTEST_SKIP() << "no script(1)";
+  const fs::path dir = temp_dir("tty");
+  const std::string inner = std::string(LASH_BINARY) + " run " + example() + " -o " + dir.string();
+  const Result r = run_lash_raw("script -qec '" + inner + "' /dev/null");
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("\r  t = "), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("100.0%"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("simulated s per wall s"), std::string::npos) << r.out;
+  fs::remove_all(dir);
+}
+
+TEST(Cli, ReportAndAnalyzeAnEarlierRun) {
+  const fs::path dir = temp_dir("analyze");
+  ASSERT_EQ(run_lash("run " + example() + " -q -o " + dir.string()).code, 0);
+  Result r = run_lash("analyze " + dir.string() + " --poincare crank --fft slider.ax --lyapunov");
+  EXPECT_EQ(r.code, 0) << r.out;
+  for (const char* text : {"poincare (stroboscopic): 2 sections", "spectrum slider.ax:",
+                           "largest Lyapunov exponent:", "verdict: "})
+    EXPECT_NE(r.out.find(text), std::string::npos) << text << "\n" << r.out;
+  const auto an = nlohmann::json::parse(std::ifstream(dir / "analysis.json"));
+  EXPECT_TRUE(an.contains("verdict"));
+  EXPECT_TRUE(an["spectra"].contains("slider.ax"));
+  // Bad requests name what is wrong and exit 2.
+  r = run_lash("analyze " + dir.string() + " --fft slider.az");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.out.find("--fft slider.az: no such channel"), std::string::npos) << r.out;
+  r = run_lash("analyze " + dir.string() + " --plane slider.speed=0");
+  EXPECT_EQ(r.code, 2);
+  r = run_lash("analyze " + fs::temp_directory_path().string());
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.out.find("not a folder written by `lash run`"), std::string::npos) << r.out;
+  // lash report writes the page and the data beside the run's results.
+  r = run_lash("report " + dir.string());
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_TRUE(fs::exists(dir / "report.html"));
+  EXPECT_TRUE(fs::exists(dir / "report_data.json"));
+  const std::string html = lash::test::read_file((dir / "report.html").string());
+  EXPECT_EQ(html.find("__LASH_REPORT_DATA__"), std::string::npos);
+  EXPECT_NE(html.find("\"flores_slider_crank\""), std::string::npos);
   fs::remove_all(dir);
 }

@@ -110,6 +110,16 @@ int main(int argc, char** argv) {
                       "Event-based Poincaré section instead of the stroboscopic one: "
                       "<body>.<x|y|phi|vx|vy|omega>=VALUE[,down], e.g. slider.vx=0,down");
   analyze->add_option("--discard", discard_periods, "Transient periods to discard (default 1)");
+  std::vector<double> window, angle_range;
+  for (auto* sub : {report, analyze}) {
+    sub->add_option("--window", window, "Statistics over this time window, T0,T1 (s)")
+        ->delimiter(',')
+        ->expected(2);
+    sub->add_option("--angle-range", angle_range,
+                    "Statistics where the crank angle is in A0,A1 (degrees; wraps through 360)")
+        ->delimiter(',')
+        ->expected(2);
+  }
   double lyapunov_d0 = 0.0;
   analyze->add_option("--lyapunov-d0", lyapunov_d0,
                       "Separation of the two trajectories, m (default 2e-4 x clearance, <= 1e-7)");
@@ -158,6 +168,8 @@ int main(int argc, char** argv) {
   if (*report || *analyze) {
     lash::ReportOptions ro;
     ro.discard_periods = discard_periods;
+    if (window.size() == 2) ro.stats_t0 = window[0], ro.stats_t1 = window[1];
+    if (angle_range.size() == 2) ro.stats_angle0 = angle_range[0], ro.stats_angle1 = angle_range[1];
     if (*analyze) {
       ro.lyapunov = lyapunov;
       ro.poincare_driver = poincare_driver;

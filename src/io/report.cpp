@@ -119,7 +119,8 @@ class Collector : public Observer {
     if (k_ == 0)
       for (int c = 0; c < ws.nc; ++c) events[c].in_contact_at_start = ws.contact[c].in_contact;
     dec.add(t, v_);
-    for (size_t i = 0; i < v_.size(); ++i) stats[i].add(t, v_[i]);
+    if (in_angle_range(t))
+      for (size_t i = 0; i < v_.size(); ++i) stats[i].add(t, v_[i]);
     if (twin) {
       for (size_t i = 0; i < v_.size(); ++i) {
         const int ti = twin_index[i];
@@ -146,6 +147,12 @@ class Collector : public Observer {
     if (k_ % orbit_every_ == 0)
       for (int c = 0; c < ws.nc; ++c) orbit[c].push_back(ws.clearance_out[c].e);
     ++k_;
+  }
+  bool in_angle_range(double t) const {
+    if (!angle_driver || std::isnan(angle0) || std::isnan(angle1)) return true;
+    double deg = std::fmod((angle_driver->initial + angle_driver->speed * t) * 180.0 / M_PI, 360.0);
+    if (deg < 0) deg += 360.0;
+    return angle0 <= angle1 ? (deg >= angle0 && deg <= angle1) : (deg >= angle0 || deg <= angle1);
   }
   void event(const ContactEvent& e, const Workspace& ws) override {
     if (writer_) writer_->event(e, ws);
@@ -192,6 +199,8 @@ class Collector : public Observer {
   std::vector<int> fft_index;
   std::vector<std::vector<double>> fft_data;
   double t_discard = 0.0;
+  const Driver* angle_driver = nullptr;
+  double angle0 = std::nan(""), angle1 = std::nan("");
   std::vector<double> frame_t;
   std::vector<std::vector<double>> frames;
   std::vector<std::vector<Vec2>> orbit;
@@ -314,6 +323,11 @@ ReportRun run_with_analysis(const LoadedModel& loaded, const ReportOptions& o,
   Workspace ws(model);
   Collector col(model, ws, o, n_out, writer, progress);
   col.t_discard = t_discard;
+  col.angle_driver = drv;
+  col.angle0 = o.stats_angle0;
+  col.angle1 = o.stats_angle1;
+  if (!std::isnan(o.stats_angle0) && !drv)
+    throw std::invalid_argument("--angle-range needs a constant-speed revolute driver");
   if (twin) {
     col.twin = twin.get();
     for (const auto& n : col.names) {
@@ -420,7 +434,10 @@ ReportRun run_with_analysis(const LoadedModel& loaded, const ReportOptions& o,
     if (c.n == 0) continue;
     st[col.names[i]] = {{"min", c.min}, {"max", c.max}, {"peak", c.peak()}, {"rms", c.rms()},
                         {"crest", c.crest()},
-                        {"window", {std::max(c.t0, 0.0), std::min(c.t1, s.end_time)}}};
+                        {"window", {std::max(c.t0, 0.0), std::min(c.t1, s.end_time)}},
+                        {"angle_range", std::isnan(o.stats_angle0)
+                                            ? json(nullptr)
+                                            : json({o.stats_angle0, o.stats_angle1})}};
     if (twin && col.twin_index[i] >= 0 && col.dev_n[i] > 0) {
       const auto& tv = twin->data[col.twin_index[i]];
       double ideal_peak = 0;

@@ -5,6 +5,8 @@
 /// stroboscopic Poincaré sections, spectra, phase portraits, the largest Lyapunov exponent and
 /// a periodic / quasi-periodic / chaotic verdict.
 #include <nlohmann/json.hpp>
+
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -29,6 +31,9 @@ struct ReportOptions {
   size_t display_points = 800;      ///< buckets for decimated series (2 points each)
   size_t frames = 400;              ///< animation frames
   double stats_t0 = -1e300, stats_t1 = 1e300;  ///< statistics window (s)
+  /// Statistics only where the crank angle (deg, of the period driver) lies in [a0, a1],
+  /// wrapping through 360 when a0 > a1; NaN: everywhere.
+  double stats_angle0 = std::nan(""), stats_angle1 = std::nan("");
 };
 
 struct ReportRun {
