@@ -67,7 +67,14 @@ inline void apply(Eigen::VectorXd& g, int body, const Vec2& s, const Vec2& f) {
 void build_constraints(const Model& model, Workspace& ws, double t, const double* y,
                        bool close_clearance, Eigen::VectorXd& phi, Eigen::MatrixXd& phi_q,
                        Eigen::VectorXd* phi_dot, Eigen::VectorXd* gamma) {
-  phi_q.setZero();
+  if (&phi_q == &ws.phi_q) {
+    // The workspace's Φ_q: only the blocks of the bodies each row touches were ever written.
+    for (int i = 0; i < ws.m; ++i)
+      for (int b : ws.row_bodies[i])
+        if (b >= 0) phi_q.block<1, 3>(i, 3 * b).setZero();
+  } else {
+    phi_q.setZero();
+  }
   int extra_row = ws.m;
 
   // Revolute rows: Φ = r_a − r_b (journal point minus bearing point).
@@ -147,31 +154,38 @@ void build_constraints(const Model& model, Workspace& ws, double t, const double
   }
 }
 
-/// Solves W x = b for symmetric positive definite W given by its lower triangle, factoring W in
-/// place (W = L Lᵀ). Returns false if W is not positive definite (redundant constraints).
-bool cholesky_solve(Eigen::MatrixXd& w, const Eigen::VectorXd& b, Eigen::VectorXd& x) {
+bool shares_body(const std::array<int, 2>& a, const std::array<int, 2>& b) {
+  for (int x : a)
+    if (x >= 0 && (x == b[0] || x == b[1])) return true;
+  return false;
+}
+
+/// Solves W x = b for symmetric positive definite W given by its lower triangle within the
+/// envelope `first` (W(i, j) = 0 for j < first[i]), factoring W in place (W = L Lᵀ, same
+/// envelope). Returns false if W is not positive definite (redundant constraints).
+bool cholesky_solve(Eigen::MatrixXd& w, const std::vector<int>& first, const Eigen::VectorXd& b,
+                    Eigen::VectorXd& x) {
   const int n = static_cast<int>(w.rows());
-  for (int j = 0; j < n; ++j) {
-    double d = w(j, j);
-    for (int k = 0; k < j; ++k) d -= w(j, k) * w(j, k);
-    if (!(d > 0.0)) return false;
-    d = std::sqrt(d);
-    w(j, j) = d;
-    for (int i = j + 1; i < n; ++i) {
+  for (int i = 0; i < n; ++i) {
+    for (int j = first[i]; j <= i; ++j) {
       double v = w(i, j);
-      for (int k = 0; k < j; ++k) v -= w(i, k) * w(j, k);
-      w(i, j) = v / d;
+      for (int k = std::max(first[i], first[j]); k < j; ++k) v -= w(i, k) * w(j, k);
+      if (j < i) {
+        w(i, j) = v / w(j, j);
+      } else {
+        if (!(v > 0.0)) return false;
+        w(i, i) = std::sqrt(v);
+      }
     }
   }
   for (int i = 0; i < n; ++i) {  // L z = b
     double v = b[i];
-    for (int k = 0; k < i; ++k) v -= w(i, k) * x[k];
+    for (int k = first[i]; k < i; ++k) v -= w(i, k) * x[k];
     x[i] = v / w(i, i);
   }
-  for (int i = n - 1; i >= 0; --i) {  // Lᵀ x = z
-    double v = x[i];
-    for (int k = i + 1; k < n; ++k) v -= w(k, i) * x[k];
-    x[i] = v / w(i, i);
+  for (int i = n - 1; i >= 0; --i) {  // Lᵀ x = z: column i of L, rows k > i within their envelopes
+    x[i] /= w(i, i);
+    for (int k = first[i]; k < i; ++k) x[k] -= w(i, k) * x[i];
   }
   return true;
 }
@@ -218,6 +232,12 @@ Workspace::Workspace(const Model& model) {
     const Joint& j = model.joints[model.drivers[di].joint];
     row_bodies[row_of_driver[di]] = {j.a.body, j.b.body};
   }
+  row_first.assign(m, 0);
+  for (int i = 0; i < m; ++i) {
+    int j = 0;
+    while (j < i && !shares_body(row_bodies[i], row_bodies[j])) ++j;
+    row_first[i] = j;
+  }
   kin.assign(nb, BodyKin{});
   nc = static_cast<int>(clearance_joints.size());
   contact.assign(nc, ContactState{});
@@ -256,8 +276,7 @@ Workspace::Workspace(const Model& model) {
   rhs_m.resize(m);
   lambda.resize(m);
   rate_m.resize(m);
-  phi_q.resize(m, nq);
-  phi_q_minv.resize(m, nq);
+  phi_q = Eigen::MatrixXd::Zero(m, nq);
   w.resize(m, m);
 }
 
@@ -412,7 +431,7 @@ bool evaluate(const Model& model, Workspace& ws, double t, const double* y, doub
       }
       ws.rhs_m[i] = ws.gamma[i] - 2.0 * a * ws.phi_dot[i] - b * b * ws.phi[i] - pq;
       ws.rate_m[i] = rate;
-      for (int j = 0; j <= i; ++j) {
+      for (int j = ws.row_first[i]; j <= i; ++j) {
         double sum = 0.0;
         for (int bi : ws.row_bodies[i]) {
           if (bi < 0 || (bi != ws.row_bodies[j][0] && bi != ws.row_bodies[j][1])) continue;
@@ -422,7 +441,7 @@ bool evaluate(const Model& model, Workspace& ws, double t, const double* y, doub
         ws.w(i, j) = sum;
       }
     }
-    if (!cholesky_solve(ws.w, ws.rhs_m, ws.lambda)) return false;
+    if (!cholesky_solve(ws.w, ws.row_first, ws.rhs_m, ws.lambda)) return false;
     for (int i = 0; i < m; ++i)
       for (int bi : ws.row_bodies[i]) {
         if (bi < 0) continue;

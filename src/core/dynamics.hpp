@@ -58,6 +58,9 @@ struct Workspace {
   /// The (at most two) bodies each constraint row touches, −1 for none/ground: Φ_q is sparse and
   /// the Schur complement is assembled from this structure.
   std::vector<std::array<int, 2>> row_bodies;
+  /// Envelope of W = Φ_q M⁻¹ Φ_qᵀ: the first row j ≤ i sharing a body with row i. Cholesky keeps
+  /// the envelope, so a chain's banded W factors in linear time.
+  std::vector<int> row_first;
   std::vector<BodyKin> kin;        ///< per body, filled at the start of each evaluation
   std::vector<int> clearance_joints;  ///< joint indices of clearance joints
   std::vector<ContactState> contact;  ///< per clearance joint
@@ -70,7 +73,7 @@ struct Workspace {
 
   // Work arrays (sized once).
   Eigen::VectorXd minv, g, phi, phi_dot, gamma, rhs_m, rate_m, lambda, qdd;
-  Eigen::MatrixXd phi_q, phi_q_minv, w;
+  Eigen::MatrixXd phi_q, w;
 
   // Outputs of the last evaluate().
   std::vector<ClearanceOutput> clearance_out;
