@@ -124,23 +124,7 @@ class Dopri5 final : public Integrator {
       if (o_.max_step > 0) h = std::min(h, o_.max_step);
       if (h < 16.0 * std::numeric_limits<double>::epsilon() * std::max(1.0, std::abs(t_)))
         return "step size underflow (h = " + std::to_string(h) + " s)";
-      bool ok = true;
-      yt_ = y_ + h * a21 * k1_;
-      ok = ok && f(t_ + c2 * h, yt_, k2_);
-      if (ok) { yt_ = y_ + h * (a31 * k1_ + a32 * k2_); ok = f(t_ + c3 * h, yt_, k3_); }
-      if (ok) { yt_ = y_ + h * (a41 * k1_ + a42 * k2_ + a43 * k3_); ok = f(t_ + c4 * h, yt_, k4_); }
-      if (ok) {
-        yt_ = y_ + h * (a51 * k1_ + a52 * k2_ + a53 * k3_ + a54 * k4_);
-        ok = f(t_ + c5 * h, yt_, k5_);
-      }
-      if (ok) {
-        yt_ = y_ + h * (a61 * k1_ + a62 * k2_ + a63 * k3_ + a64 * k4_ + a65 * k5_);
-        ok = f(t_ + h, yt_, k6_);
-      }
-      if (ok) {
-        ynew_ = y_ + h * (a71 * k1_ + a73 * k3_ + a74 * k4_ + a75 * k5_ + a76 * k6_);
-        ok = f(t_ + h, ynew_, k7_);
-      }
+      const bool ok = stages(y_, k1_, t_, h);
       if (!ok) {  // a stage left the domain: shrink hard and retry
         ++stats_.rejected_steps;
         h_ = 0.25 * h;
@@ -158,10 +142,7 @@ class Dopri5 final : public Integrator {
       }
       // Accepted: dense-output coefficients over [t, t + h].
       r1_ = y_;
-      r2_ = ynew_ - y_;
-      r3_ = h * k1_ - r2_;
-      r4_ = r2_ - h * k7_ - r3_;
-      r5_ = h * (d1 * k1_ + d3 * k3_ + d4 * k4_ + d5 * k5_ + d6 * k6_ + d7 * k7_);
+      dense_coefficients(k1_, h);
       t_old_ = t_;
       h_step_ = h;
       t_ = t_ + h;
@@ -239,7 +220,7 @@ class Dopri5 final : public Integrator {
     for (int attempt = 0; attempt < 4; ++attempt) {
       const double h = t_try - t_old_;
       if (!(h > 0.0) || t_try > t_old_ + h_step_) return keep_dense();
-      if (!stages_from_start(h)) return keep_dense();
+      if (!stages(r1_, k1_prev_, t_old_, h)) return keep_dense();
       if (k < 0) break;
       p_.events(t_try, ynew_.data(), g_tmp_.data());
       if (g_tmp_[k] > 0.0) break;
@@ -248,10 +229,7 @@ class Dopri5 final : public Integrator {
                         8 * std::numeric_limits<double>::epsilon() * std::abs(t_try));
     }
     const double h = t_try - t_old_;
-    r2_ = ynew_ - r1_;
-    r3_ = h * k1_prev_ - r2_;
-    r4_ = r2_ - h * k7_ - r3_;
-    r5_ = h * (d1 * k1_prev_ + d3 * k3_ + d4 * k4_ + d5 * k5_ + d6 * k6_ + d7 * k7_);
+    dense_coefficients(k1_prev_, h);
     h_step_ = h;
     t_ = t_try;
     t_event_ = t_try;
@@ -259,21 +237,29 @@ class Dopri5 final : public Integrator {
     k1_ = k7_;
   }
 
-  /// The stages of a step of size h from the last step's start (r1_, k1_prev_) into ynew_, k7_.
-  bool stages_from_start(double h) {
-    const Eigen::VectorXd& y0 = r1_;
-    yt_ = y0 + h * a21 * k1_prev_;
-    if (!f(t_old_ + c2 * h, yt_, k2_)) return false;
-    yt_ = y0 + h * (a31 * k1_prev_ + a32 * k2_);
-    if (!f(t_old_ + c3 * h, yt_, k3_)) return false;
-    yt_ = y0 + h * (a41 * k1_prev_ + a42 * k2_ + a43 * k3_);
-    if (!f(t_old_ + c4 * h, yt_, k4_)) return false;
-    yt_ = y0 + h * (a51 * k1_prev_ + a52 * k2_ + a53 * k3_ + a54 * k4_);
-    if (!f(t_old_ + c5 * h, yt_, k5_)) return false;
-    yt_ = y0 + h * (a61 * k1_prev_ + a62 * k2_ + a63 * k3_ + a64 * k4_ + a65 * k5_);
-    if (!f(t_old_ + h, yt_, k6_)) return false;
-    ynew_ = y0 + h * (a71 * k1_prev_ + a73 * k3_ + a74 * k4_ + a75 * k5_ + a76 * k6_);
-    return f(t_old_ + h, ynew_, k7_);
+  /// The stages k2…k7 of a step of size h from (t0, y0) with first stage k1, and the 5th-order
+  /// solution ynew_ at t0 + h. False if a stage cannot be evaluated.
+  bool stages(const Eigen::VectorXd& y0, const Eigen::VectorXd& k1, double t0, double h) {
+    yt_ = y0 + h * a21 * k1;
+    if (!f(t0 + c2 * h, yt_, k2_)) return false;
+    yt_ = y0 + h * (a31 * k1 + a32 * k2_);
+    if (!f(t0 + c3 * h, yt_, k3_)) return false;
+    yt_ = y0 + h * (a41 * k1 + a42 * k2_ + a43 * k3_);
+    if (!f(t0 + c4 * h, yt_, k4_)) return false;
+    yt_ = y0 + h * (a51 * k1 + a52 * k2_ + a53 * k3_ + a54 * k4_);
+    if (!f(t0 + c5 * h, yt_, k5_)) return false;
+    yt_ = y0 + h * (a61 * k1 + a62 * k2_ + a63 * k3_ + a64 * k4_ + a65 * k5_);
+    if (!f(t0 + h, yt_, k6_)) return false;
+    ynew_ = y0 + h * (a71 * k1 + a73 * k3_ + a74 * k4_ + a75 * k5_ + a76 * k6_);
+    return f(t0 + h, ynew_, k7_);
+  }
+
+  /// Dense-output coefficients of the step from r1_ to ynew_ (Hairer's contd5).
+  void dense_coefficients(const Eigen::VectorXd& k1, double h) {
+    r2_ = ynew_ - r1_;
+    r3_ = h * k1 - r2_;
+    r4_ = r2_ - h * k7_ - r3_;
+    r5_ = h * (d1 * k1 + d3 * k3_ + d4 * k4_ + d5 * k5_ + d6 * k6_ + d7 * k7_);
   }
 
   double bracket(int k, double a, double ga, double b, double gb) {
