@@ -258,6 +258,7 @@ RunResult simulate(const Model& model, Workspace& ws, Observer& observer,
     ok = emit(t_out);
     ++k;
   }
+  if (result.status.ok) result.status.t = s.end_time;  // the time reached
   result.stats = sim.stats();
   result.missed_events = ws.missed_events;
   result.wall_seconds =
