@@ -242,3 +242,19 @@ joints:
   EXPECT_NEAR(c.contact.stiffness,
               hertz_cylinder_stiffness(20e-3, 19.5e-3, 207e9, 0.3, 207e9, 0.3), 1.0);
 }
+
+TEST(Overrides, FlowListsAndMaps) {
+  const Model m = load_model_text(kGood, "model.yaml",
+                                  {"bodies.slider.position=[0.2, 0.01]",
+                                   "joints.gudgeon.friction={law: coulomb, mu: 0.1}"})
+                      .model;
+  EXPECT_DOUBLE_EQ(m.bodies[2].r0.x(), 0.2);
+  EXPECT_DOUBLE_EQ(m.bodies[2].r0.y(), 0.01);
+  EXPECT_EQ(m.joints[2].clearance->friction_law, FrictionLaw::coulomb);
+  EXPECT_DOUBLE_EQ(m.joints[2].clearance->friction.mu, 0.1);
+  // A malformed list is reported against the override, not a line of the file.
+  const auto d = problems(kGood, {"bodies.slider.position=[0.2, x]"});
+  ASSERT_EQ(d.size(), 1u);
+  EXPECT_EQ(d[0].line, 0);
+  EXPECT_NE(d[0].message.find("(value set with --set)"), std::string::npos) << d[0].str();
+}

@@ -771,6 +771,35 @@ class Loader {
   std::vector<YAML::Node> joint_nodes_;
 };
 
+/// Copies a parsed node without its source marks, so diagnostics say "value set with --set".
+YAML::Node unmarked(const YAML::Node& n) {
+  if (n.IsSequence()) {
+    YAML::Node out(YAML::NodeType::Sequence);
+    for (const auto& e : n) out.push_back(unmarked(e));
+    return out;
+  }
+  if (n.IsMap()) {
+    YAML::Node out(YAML::NodeType::Map);
+    for (const auto& kv : n) out[kv.first.as<std::string>("")] = unmarked(kv.second);
+    return out;
+  }
+  return YAML::Node(n.IsScalar() ? n.Scalar() : std::string());
+}
+
+/// An override's value: a flow list or map ("[0.1, 0]", "{law: coulomb, mu: 0.1}") becomes that
+/// structure; anything else is the scalar text as written.
+YAML::Node override_value(const std::string& value) {
+  if (!value.empty() && (value.front() == '[' || value.front() == '{')) {
+    try {
+      const YAML::Node parsed = YAML::Load(value);
+      if (parsed.IsSequence() || parsed.IsMap()) return unmarked(parsed);
+    } catch (const YAML::Exception&) {
+      // not YAML: keep the text, the loader reports it with its expectation
+    }
+  }
+  return YAML::Node(value);
+}
+
 /// Applies "a.b.c=value": the parents must exist; the last key may be new.
 void apply_override(YAML::Node root, const std::string& spec, Reporter& r) {
   const auto eq = spec.find('=');
@@ -806,7 +835,7 @@ void apply_override(YAML::Node root, const std::string& spec, Reporter& r) {
     r.list.push_back({"--set " + path, 0, 0, "", "'" + walked + "' is not a map"});
     return;
   }
-  node[keys.back()] = YAML::Node(value);
+  node[keys.back()] = override_value(value);
 }
 
 LoadedModel load_root(YAML::Node root, const std::string& filename,
