@@ -2,6 +2,10 @@
 // the report data of the Flores example is complete and consistent.
 #include <cmath>
 
+#include <unistd.h>
+
+#include <filesystem>
+
 #include "io/report.hpp"
 #include "test_support.hpp"
 
@@ -149,4 +153,24 @@ TEST(Report, StatisticsOverACrankAngleRange) {
   const auto& st = bottom.data["analysis"]["statistics"]["slider.ax"];
   EXPECT_NEAR(st["max"].get<double>(), extreme(170, 190, true), 1.0);
   EXPECT_NEAR(st["min"].get<double>(), extreme(170, 190, false), 1.0);
+}
+
+TEST(Report, PageEmbedsTheDataSafely) {
+  // A model name that tries to close the data script and open another one must come back intact
+  // from the page, and must not end the script early.
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("lash_report_embed_" + std::to_string(getpid()));
+  nlohmann::json d = {{"version", 1},
+                      {"model", {{"name", "</script><!--<script>alert(1)</script>"}}}};
+  write_report(d, dir.string());
+  const std::string html = read_file((dir / "report.html").string());
+  const std::string open = "<script id=\"lash-data\" type=\"application/json\">";
+  const auto a = html.find(open);
+  ASSERT_NE(a, std::string::npos);
+  const auto b = html.find("</script>", a);
+  ASSERT_NE(b, std::string::npos);
+  const std::string embedded = html.substr(a + open.size(), b - a - open.size());
+  EXPECT_EQ(embedded.find('<'), std::string::npos) << "no '<' may reach the HTML parser";
+  EXPECT_EQ(nlohmann::json::parse(embedded), d);
+  fs::remove_all(dir);
 }

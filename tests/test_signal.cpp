@@ -22,7 +22,9 @@ TEST(Spectrum, SumOfSinusoidsOnBins) {
     EXPECT_NEAR(s.amplitude[50], 3.0, 1e-9);
     EXPECT_NEAR(s.amplitude[120], 0.5, 1e-9);
     EXPECT_NEAR(s.amplitude[0], 0.0, 1e-9);  // the mean is removed
-    if (w == Window::rectangular) EXPECT_NEAR(s.amplitude[80], 0.0, 1e-9);
+    if (w == Window::rectangular) {
+      EXPECT_NEAR(s.amplitude[80], 0.0, 1e-9);
+    }
   }
   // Parseval with the rectangular window: Σ PSD·df = variance of the signal.
   const Spectrum s = amplitude_spectrum(x, dt, Window::rectangular);

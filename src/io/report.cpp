@@ -33,7 +33,7 @@ std::vector<double> r6(std::vector<double> v) {
 /// two points (its first and last time) carrying each channel's extremes in time order.
 class Decimator {
  public:
-  Decimator(size_t channels, size_t size) : size_(std::max<size_t>(1, size)), data(channels) {
+  Decimator(size_t channels, size_t size) : data(channels), size_(std::max<size_t>(1, size)) {
     mn_.resize(channels);
     mx_.resize(channels);
     imn_.resize(channels);
@@ -643,12 +643,15 @@ std::vector<std::string> write_report(const json& data, const std::string& folde
   const std::string text = data.dump();
   std::ofstream(folder + "/report_data.json") << text << "\n";
   notes.push_back(folder + "/report_data.json");
-  // The page: the template with the data inlined (a '</' inside a string would end the script).
+  // The page: the template with the data inlined. Every '<' (only possible inside JSON strings:
+  // model names, paths, expressions) becomes \u003c, so no text can close or reopen the script.
   std::string escaped;
   escaped.reserve(text.size());
-  for (size_t i = 0; i < text.size(); ++i) {
-    escaped += text[i];
-    if (text[i] == '<' && i + 1 < text.size() && text[i + 1] == '/') escaped += '\\';
+  for (char c : text) {
+    if (c == '<')
+      escaped += "\\u003c";
+    else
+      escaped += c;
   }
   std::string html(report_html_template());
   const std::string token = "__LASH_REPORT_DATA__";
