@@ -43,6 +43,8 @@ class ResultsWriter : public Observer {
     double contact_time = 0.0, onset_time = 0.0, max_impact_velocity = 0.0;
     bool in_contact = false;
   };
+  void append_number(double v);  ///< %.9g into row_
+
   const Model& model_;
   std::string folder_;
   std::FILE* ts_ = nullptr;
