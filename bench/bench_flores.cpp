@@ -97,7 +97,7 @@ class SliderObserver : public lash::Observer {
  public:
   SliderObserver(const lash::Model& m, Series& s) : s_(s), b_(body_index(m, "slider")) {}
   void output(double t, const Eigen::VectorXd& y, const lash::Workspace& ws) override {
-    s_.push(t, y[3 * b_], y[ws.nq + 3 * b_]);
+    s_.push(t, y[ws.blocks[b_].offset], y[ws.nq + ws.blocks[b_].offset]);
   }
 
  private:

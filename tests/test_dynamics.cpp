@@ -265,8 +265,9 @@ TEST(RightHandSide, AllocatesNothing) {
   const Model m = load_model_text(yaml, "m.yaml").model;
   Workspace ws(m);
   Eigen::VectorXd y = initial_state(m, ws), ydot(ws.ny);
-  y[3 * 2] += 0.6e-3;  // push the slider so the journal penetrates its bearing
-  ws.contact[0] = {true, 1.0};
+  y[ws.blocks[2].offset] += 0.6e-3;  // push the slider so the journal penetrates its bearing
+  ws.contact[0] = {true};
+  y[ws.aux_impact[0]] = 1.0;
   ASSERT_TRUE(evaluate(m, ws, 0.0, y.data(), ydot.data()));
   ASSERT_GT(ws.clearance_out[0].f_n, 0.0);
   g_allocations = 0;

@@ -121,7 +121,7 @@ TEST(ModelLoader, UnknownLawsAndTypes) {
   d = problems(with("type: translational", "type: prismatc"));
   ASSERT_EQ(d.size(), 1u);
   EXPECT_EQ(d[0].str(), "model.yaml:29:17: joint 'guide': unknown joint type 'prismatc', expected "
-                        "one of: revolute, translational, fixed");
+                        "one of: revolute, translational, fixed, distance");
 }
 
 TEST(ModelLoader, MissingRequiredKeys) {

@@ -194,6 +194,8 @@ TEST(Events, ModeAgreesWithTheGapThroughGrazingContacts) {
       wrong += (delta[i] > 1e-12 && mode[i] == 0.0) || (delta[i] < -1e-12 && mode[i] == 1.0);
     EXPECT_EQ(wrong, 0) << integrator;
     EXPECT_EQ(r.result.missed_events, 0) << integrator;
-    EXPECT_GT(r.rec->events.size(), 150u) << integrator;
+    // The motion is chaotic, so the count depends on every rounding (137–160 seen); a lost
+    // onset would stop all later impacts and leave a handful.
+    EXPECT_GT(r.rec->events.size(), 100u) << integrator;
   }
 }

@@ -28,9 +28,12 @@ inline std::string example_path(const std::string& name) {
 /// Keeps every channel of every output in memory (tests only: runs are short).
 class Recorder : public Observer {
  public:
-  explicit Recorder(const Model& m) : model_(m), names_(channel_names(m)), values_(names_.size()) {}
+  explicit Recorder(const Model& m) : model_(m) {
+    for (const auto& c : channel_info(m, Workspace(m))) names_.push_back(c.name);
+    values_.resize(names_.size());
+  }
   void output(double t, const Eigen::VectorXd& y, const Workspace& ws) override {
-    channel_values(model_, ws, y, values_);
+    channel_values(model_, ws, y, values_.data());
     time.push_back(t);
     for (size_t i = 0; i < names_.size(); ++i) data[names_[i]].push_back(values_[i]);
   }

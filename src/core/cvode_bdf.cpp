@@ -43,7 +43,7 @@ class CvodeBdf final : public Integrator {
 
   const char* name() const override { return "bdf"; }
 
-  void reset(double t, const Eigen::VectorXd& y) override {
+  void reset(double t, const Eigen::VectorXd& y, double /*step: CVODE chooses its own*/) override {
     for (int i = 0; i < p_.n; ++i) NV_Ith_S(y_, i) = y[i];
     if (!initialised_) {
       check(CVodeInit(mem_, rhs_cb, t, y_), "CVodeInit");

@@ -43,7 +43,8 @@ class Dopri5 final : public Integrator {
   const char* name() const override { return "dopri5"; }
   IntegratorStats stats() const override { return stats_; }
 
-  void reset(double t, const Eigen::VectorXd& y) override {
+  void reset(double t, const Eigen::VectorXd& y, double step) override {
+    if (step > 0.0) h_ = step;
     t_ = t;
     y_ = y;
     have_step_ = false;
@@ -51,6 +52,8 @@ class Dopri5 final : public Integrator {
     need_k1_ = true;
     if (p_.n_events > 0) p_.events(t_, y_.data(), g_old_.data());
   }
+
+  double step_hint() const override { return h_; }
 
   Advance advance(double t_out, Eigen::VectorXd& y) override {
     for (;;) {

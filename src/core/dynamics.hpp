@@ -1,23 +1,26 @@
 #pragma once
 /// @file dynamics.hpp
-/// Equations of motion in planar body coordinates (seed 001; Nikravesh):
+/// Equations of motion in planar body coordinates (Nikravesh, Computer-Aided Analysis of
+/// Mechanical Systems, 1988, ch. 13):
 ///   M q̈ = g(q, q̇, t) + Φ_qᵀ λ,   Φ_q q̈ = γ − 2αΦ̇ − β²Φ  (Baumgarte),
-/// q = [x, y, φ] per body. M is diagonal, so λ comes from the m×m Schur complement
-/// (Φ_q M⁻¹ Φ_qᵀ) λ = γ_B − Φ_q M⁻¹ g, assembled from the sparse row structure and factored by
-/// Cholesky. Clearance joints add no
-/// constraint; they add contact forces to g. The ODE state is
-///   y = [q (3nb), q̇ (3nb), E_dissipated, W_input].
+/// q made of one coordinate block per body (core/kinematics.hpp). M is block diagonal, so λ
+/// comes from the m×m Schur complement (Φ_q M⁻¹ Φ_qᵀ) λ = γ_B − Φ_q M⁻¹ g, assembled from the
+/// sparse row structure and factored by Cholesky. Every element kind lives in
+/// core/elements/ and is listed in core/elements/registry.hpp. The ODE state is
+///   y = [q (nq), q̇ (nq), auxiliary states (na), E_dissipated, W_input].
 #include <Eigen/Core>
 #include <array>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "core/expression.hpp"
+#include "core/kinematics.hpp"
 #include "core/model.hpp"
 
 namespace lash {
 
-/// Everything a clearance joint reports at one instant (shared/reference/formulas.md).
+/// Everything a clearance joint reports at one instant (docs/architecture.md).
 struct ClearanceOutput {
   Vec2 e = Vec2::Zero();       ///< eccentricity r_J − r_B, m
   double e_len = 0.0;          ///< |e|, m
@@ -26,33 +29,40 @@ struct ClearanceOutput {
   double f_n = 0.0;            ///< normal force, N (≥ 0)
   double f_t = 0.0;            ///< tangential force on the journal along t, N
   double v_t = 0.0;            ///< relative tangential velocity, m/s
+  Vec2 force = Vec2::Zero();   ///< force on the journal in world axes, −F_N n + F_T t, N
   double potential = 0.0;      ///< elastic energy, J
-  double dissipation = 0.0;    ///< dissipated power, W (≥ 0)
+  double dissipation = 0.0;    ///< dissipated power, W
 };
 
-/// Pose and velocity of one body at the current evaluation (the ground: all zero, A = I).
-struct BodyKin {
-  Vec2 r = Vec2::Zero(), v = Vec2::Zero();
-  double phi = 0.0, omega = 0.0;
-  Eigen::Matrix2d A = Eigen::Matrix2d::Identity();
+/// What a load did at the last evaluation (its channels).
+struct LoadOutput {
+  Vec2 force = Vec2::Zero();   ///< force on its second body (first for force loads), N
+  double torque = 0.0;         ///< torque on its first body, N·m
+  Vec2 deflection = Vec2::Zero();  ///< bushing: b − a in the frame's axes, m
+  double power = 0.0;          ///< power of its forces on the bodies, W
 };
 
 /// Discrete state of a clearance joint: changed only at located events.
 struct ContactState {
   bool in_contact = false;
-  double impact_velocity = 0.0;  ///< δ̇⁻ at the located onset, m/s
 };
 
-/// The mutable companion of a Model: discrete state, compiled expressions, preallocated
-/// matrices and the quantities of the last evaluation. One per concurrent run.
+/// The mutable companion of a finalized Model: coordinate and row layout, discrete state,
+/// compiled expressions, preallocated matrices and the quantities of the last evaluation.
+/// One per concurrent run; any number over one shared model, from any threads.
 struct Workspace {
+  /// Lays out coordinates, constraint rows and auxiliary states. The model must have been
+  /// finalized (core/finalize.hpp); throws std::invalid_argument otherwise.
   explicit Workspace(const Model& model);
 
   int nb = 0;   ///< bodies
-  int nq = 0;   ///< 3 nb
+  int nq = 0;   ///< coordinates (sum of the block sizes)
   int m = 0;    ///< constraint equations
-  int ny = 0;   ///< ODE state size, 2 nq + 2
+  int na = 0;   ///< auxiliary states
+  int ny = 0;   ///< ODE state size, 2 nq + na + 2
   int nc = 0;   ///< clearance joints
+  int i_dissipated = 0, i_input = 0;  ///< indices of E_dissipated and W_input in y
+  std::vector<BodyBlock> blocks;   ///< per body
   std::vector<int> row_of_joint;   ///< first constraint row of each joint (−1: clearance joint)
   std::vector<int> row_of_driver;  ///< constraint row of each driver
   /// The (at most two) bodies each constraint row touches, −1 for none/ground: Φ_q is sparse and
@@ -64,9 +74,14 @@ struct Workspace {
   std::vector<BodyKin> kin;        ///< per body, filled at the start of each evaluation
   std::vector<int> clearance_joints;  ///< joint indices of clearance joints
   std::vector<ContactState> contact;  ///< per clearance joint
+  std::vector<int> aux_impact;     ///< per clearance joint: y index of its δ̇⁻
+  std::vector<int> aux_bristle;    ///< per clearance joint: y index of LuGre's z, or −1
+  std::vector<int> aux_driver;     ///< per driver: y index of its integrated speed, or −1
+  std::vector<std::string> aux_names;  ///< per auxiliary state, `<element>.<state>`
 
-  // Expressions (compiled against `vars`).
-  ExpressionVariables vars;
+  // Expressions, compiled against `*vars` (owned through a pointer so that a moved workspace
+  // keeps its expressions bound).
+  std::unique_ptr<ExpressionVariables> vars;
   std::vector<Expression> driver_expr;              ///< per driver (or empty slot)
   std::vector<std::vector<Expression>> load_expr;   ///< per load: fx, fy or torque
   bool loads_use_state = false;
@@ -77,32 +92,46 @@ struct Workspace {
 
   // Outputs of the last evaluate().
   std::vector<ClearanceOutput> clearance_out;
+  std::vector<LoadOutput> load_out;
   double kinetic = 0.0, potential = 0.0, dissipated_power = 0.0, input_power = 0.0;
   double constraint_violation = 0.0;  ///< max |Φ|, m or rad
   long rhs_evaluations = 0;
   long missed_events = 0;  ///< crossings found only by the mode/gap consistency check
+
+  /// The cached kinematics of body b (the ground for kGround).
+  const BodyKin& kin_of(int b) const {
+    static const BodyKin ground;
+    return b == kGround ? ground : kin[b];
+  }
 };
 
-/// Evaluates ẏ = f(t, y); fills the workspace's outputs (λ, contact quantities, energies).
-/// Allocates nothing. Returns false if the constraint matrix is singular or a value is not finite.
+/// Kinematics of body b read directly from y (the ground for kGround).
+BodyKin body_kin(const Workspace& ws, int b, const double* y);
+
+/// Names of the entries of y, in order: `<body>.<x|y|phi>`, `<body>.<vx|vy|omega>`, the
+/// auxiliary states' names, `energy.dissipated`, `energy.input`.
+std::vector<std::string> state_names(const Model& model, const Workspace& ws);
+
+/// Fills ws.kin from y.
+void update_kin(Workspace& ws, const double* y);
+
+/// Evaluates ẏ = f(t, y); fills the workspace's outputs (λ, contact and load quantities,
+/// energies). Allocates nothing. Returns false if the constraint matrix is singular or a value
+/// is not finite. Throws std::runtime_error if an expression cannot be evaluated.
 bool evaluate(const Model& model, Workspace& ws, double t, const double* y, double* ydot);
 
 /// Event functions, one per clearance joint: g_k = s_k δ_k with s_k = +1 in free flight and −1 in
 /// contact, so every event is g rising through zero (onset: δ ↑ 0; separation: δ ↓ 0).
 void event_functions(const Model& model, const Workspace& ws, const double* y, double* g);
 
-/// Penetration δ and its rate δ̇ of clearance joint k (index into ws.clearance_joints).
-void clearance_gap(const Model& model, const Workspace& ws, int k, const double* y, double& delta,
-                   double& delta_dot);
-
 /// Constraint residual Φ(q, t) and max |Φ| (drift monitor).
 double constraint_residual(const Model& model, Workspace& ws, double t, const double* y);
 
 /// Builds a consistent initial state y(0) by Newton iteration on the position constraints and a
 /// least-squares solve of the velocity constraints. Rule `ideal`: clearance joints are closed
-/// (journals centred) and all velocities follow from the drivers (shared/reference/mechanisms.md
-/// §1). Rule `given`: the model's poses and velocities are projected onto the actual constraints.
-/// Throws std::runtime_error if the constraints cannot be satisfied.
+/// (journals centred) and all velocities follow from the drivers. Rule `given`: the model's
+/// poses and velocities are projected onto the actual constraints. Throws std::runtime_error if
+/// the constraints cannot be satisfied.
 Eigen::VectorXd initial_state(const Model& model, Workspace& ws);
 
 /// Moves y (positions, then velocities) to the nearest state, in the least-squares sense, that
@@ -110,8 +139,9 @@ Eigen::VectorXd initial_state(const Model& model, Workspace& ws);
 /// state consistently (Lyapunov exponents). Throws std::runtime_error if it does not converge.
 void project_state(const Model& model, Workspace& ws, double t, Eigen::VectorXd& y);
 
-/// Driver coordinate target f and its derivatives at t (rad or m).
-void driver_motion(const Model& model, Workspace& ws, int d, double t, double& f, double& fd,
-                   double& fdd);
+/// Driver coordinate target f and its derivatives at t (rad or m); `y` supplies the integrated
+/// position of a speed profile.
+void driver_motion(const Model& model, const Workspace& ws, int d, double t, const double* y,
+                   double& f, double& fd, double& fdd);
 
 }  // namespace lash

@@ -44,8 +44,12 @@ struct Advance {
 class Integrator {
  public:
   virtual ~Integrator() = default;
-  /// (Re)starts from (t, y), e.g. after an event changed the right-hand side.
-  virtual void reset(double t, const Eigen::VectorXd& y) = 0;
+  /// (Re)starts from (t, y), e.g. after an event changed the right-hand side. A positive
+  /// `step` is the first step size to try (a saved step_hint(), so a restarted run continues
+  /// exactly as one that never stopped); otherwise the integrator keeps its own.
+  virtual void reset(double t, const Eigen::VectorXd& y, double step = 0.0) = 0;
+  /// The step size the integrator would try next (0 if it has none).
+  virtual double step_hint() const { return 0.0; }
   /// Integrates toward t_out; y receives the state at the returned time. An event returns the
   /// first point found just past the crossing (g_k > 0 there).
   virtual Advance advance(double t_out, Eigen::VectorXd& y) = 0;

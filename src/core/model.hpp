@@ -1,8 +1,10 @@
 #pragma once
 /// @file model.hpp
 /// The immutable, validated, SI-unit description of a planar mechanism. Built by the loader
-/// (io/model_loader.hpp) or by hand in C++; never changed during a run. Notation and sign
-/// conventions: docs/architecture.md.
+/// (io/model_loader.hpp) or by hand in C++, then passed through `finalize` (core/finalize.hpp),
+/// which validates it and computes derived values; never changed during a run. Notation and
+/// sign conventions: docs/architecture.md.
+#include <cmath>
 #include <optional>
 #include <string>
 #include <vector>
@@ -22,16 +24,23 @@ struct Marker {
   Vec2 s_P_B = Vec2::Zero();
 };
 
-/// A rigid body. Its frame has its origin at the centre of mass.
+/// Body kinds (core/elements/rigid_body.cpp, point_mass.cpp): a rigid body has coordinates
+/// [x, y, φ] and a diagonal mass block (m, m, I); a point mass has [x, y] and (m, m).
+enum class BodyType { rigid, point_mass };
+
+/// A body. A rigid body's frame has its origin at the centre of mass; a point mass has no
+/// orientation (its markers all lie at its position).
 struct Body {
   std::string name;
+  BodyType type = BodyType::rigid;
   double mass = 0.0;                   ///< kg, > 0
-  double inertia = 0.0;                ///< kg·m² about the centre of mass, > 0
+  double inertia = 0.0;                ///< kg·m² about the centre of mass, > 0 (rigid only)
   Vec2 r0 = Vec2::Zero();              ///< initial position of the centre of mass in world, m
-  double phi0 = 0.0;                   ///< initial orientation, rad
+  double phi0 = 0.0;                   ///< initial orientation, rad (rigid only)
   Vec2 v0 = Vec2::Zero();              ///< initial velocity (initial_state: given), m/s
   double omega0 = 0.0;                 ///< initial angular velocity (initial_state: given), rad/s
   std::vector<Marker> markers;
+  bool rotates() const { return type == BodyType::rigid; }
 };
 
 /// A point on a body (or on the ground, in world coordinates).
@@ -41,61 +50,102 @@ struct PointRef {
   std::string label;      ///< as written in the model, e.g. "rod.B"
 };
 
-enum class JointType { revolute, translational, fixed };
+/// Hertz material of one side of a contact.
+struct Material {
+  double youngs_modulus = 0.0;  ///< E, Pa
+  double poisson_ratio = 0.0;   ///< ν
+};
 
 /// A revolute clearance joint: the journal (point `a` of its joint) moves inside the bearing
-/// (point `b`); contact per shared/reference/formulas.md.
+/// (point `b`); contact per docs/architecture.md, "Clearance joints".
 struct Clearance {
   double clearance = 0.0;        ///< c = R_B − R_J, m
   double journal_radius = 0.0;   ///< R_J, m
   double bearing_radius = 0.0;   ///< R_B, m
   NormalLaw normal_law = NormalLaw::lankarani_nikravesh;
+  /// Contact parameters; a stiffness of 0 is derived by `finalize` from the materials.
   ContactParams contact;
+  std::optional<Material> journal_material, bearing_material;
   FrictionLaw friction_law = FrictionLaw::none;
   FrictionParams friction;
+  LuGreParams lugre;             ///< friction_law == lugre
   /// Floor on the located impact velocity δ̇⁻ used by the damped laws, m/s: a grazing contact
   /// would otherwise divide by ~0.
   double min_impact_velocity = 1e-3;
 };
 
-/// A joint between two bodies. Revolute: `a` is the journal point, `b` the bearing point and the
-/// constraint is r_a = r_b. Translational: `a` is on the guide body, whose frame holds `axis`;
-/// `b` on the sliding body; relative rotation locked. Fixed: r_a = r_b and rotation locked.
+/// Joint kinds (core/elements/<kind>.cpp). Revolute: `a` is the journal point, `b` the bearing
+/// point and r_a = r_b. Translational: `a` is on the guide body, whose frame holds `axis`; `b` on
+/// the sliding body; relative rotation locked (unless the slider is a point mass). Fixed: r_a =
+/// r_b and rotation locked. Distance: |r_b − r_a| = length (a massless rod with pins at a, b).
+enum class JointType { revolute, translational, fixed, distance };
+
 struct Joint {
   std::string name;
   JointType type = JointType::revolute;
   PointRef a, b;
   Vec2 axis = Vec2::UnitX();     ///< translational: unit slide axis in body a's frame
   double angle0 = 0.0;           ///< translational/fixed: locked φ_b − φ_a, rad
+  double length = NAN;           ///< distance: rod length, m (NaN: the initial distance)
   std::optional<Clearance> clearance;  ///< set: a revolute clearance joint (no constraint)
   bool is_constraint() const { return !clearance.has_value(); }
 };
 
-enum class DriverProfile { constant_speed, expression };
+/// How a driver's coordinate moves: coordinate(t) = initial + f(t) with f = speed·t
+/// (constant_speed), f = expression(t) (position), or f = ∫₀ᵗ expression (speed).
+enum class DriverProfile { constant_speed, position, speed };
 
-/// Prescribed motion of a revolute joint angle θ = φ_a − φ_b or a translational slide
-/// s = (r_b − r_a)·axis: coordinate(t) = initial + f(t), f(t) = speed·t or an expression.
+/// What a driver prescribes: a joint coordinate (revolute θ = φ_a − φ_b, translational
+/// s = (r_b − r_a)·axis) or one coordinate of a body relative to the ground (x, y or φ), which
+/// lets the body's joints have clearance.
+enum class DriverTarget { joint, body };
+enum class BodyCoordinate { x, y, phi };
+
 struct Driver {
   std::string name;
-  int joint = -1;
+  DriverTarget target = DriverTarget::joint;
+  int joint = -1;                ///< target joint
+  int body = -1;                 ///< target body
+  BodyCoordinate coordinate = BodyCoordinate::phi;
   DriverProfile profile = DriverProfile::constant_speed;
   double speed = 0.0;            ///< rad/s or m/s (constant_speed)
-  std::string expression;        ///< f(time) in rad or m (expression)
-  double initial = 0.0;          ///< coordinate at t = 0, rad or m
+  std::string expression;        ///< f(time) (position) or ḟ(time) (speed), rad or m [/s]
+  double initial = NAN;          ///< coordinate at t = 0, rad or m (NaN: from the initial poses)
+
 };
 
-enum class LoadType { force, torque, spring_damper, torsional_spring_damper };
+/// Load kinds (core/elements/<kind>.cpp). force: (fx, fy) expressions in world axes at point
+/// `a`. torque: expression on body `body_a`. spring_damper: between points a and b, tension
+/// f = k(L − L0) + c L̇. torsional_spring_damper: T = k(θ − θ0) + c θ̇ with θ = φ_b − φ_a, acting
+/// +T on a, −T on b. bushing: spring–dampers along the two axes of `frame_body`'s frame between
+/// point a and point b, plus an optional torsional part.
+enum class LoadType { force, torque, spring_damper, torsional_spring_damper, bushing };
 
-/// An applied load. force: (fx, fy) expressions in world axes at point `a`. torque: expression on
-/// body `body_a`. spring_damper: between points a and b, tension f = k(L − L0) + c L̇.
-/// torsional_spring_damper: T = k(θ − θ0) + c θ̇ with θ = φ_b − φ_a, acting +T on a, −T on b.
 struct Load {
   std::string name;
   LoadType type = LoadType::force;
   PointRef a, b;
   int body_a = kGround, body_b = kGround;
   std::string fx = "0", fy = "0", torque = "0";
-  double stiffness = 0.0, damping = 0.0, free_length = 0.0, angle0 = 0.0;
+  double stiffness = 0.0, damping = 0.0;
+  double angle0 = NAN;           ///< torsional part: rest angle φ_b − φ_a, rad (NaN: initial)
+  double free_length = NAN;      ///< spring_damper: L0, m (NaN: the initial length)
+  int frame_body = kGround;      ///< bushing: body whose axes the pairs follow
+  Vec2 stiffness_xy = Vec2::Zero(), damping_xy = Vec2::Zero();  ///< bushing, N/m and N·s/m
+};
+
+/// Sensor kinds (core/elements/sensors.cpp): a point `at` of a body and a unit `axis`, fixed in
+/// the body's frame or in the ground's.
+enum class SensorType { accelerometer, velocity, displacement };
+
+struct Sensor {
+  std::string name;
+  SensorType type = SensorType::accelerometer;
+  PointRef at;
+  Vec2 axis = Vec2::UnitX();     ///< unit vector, in the body's or the ground's axes
+  bool body_axis = true;         ///< axis fixed in the body (false: in the ground)
+  bool gravity = true;           ///< accelerometer: reads specific force a − g, as a real one
+  double mass = 0.0;             ///< kg added at `at` (a point mass pinned there by finalize)
 };
 
 enum class IntegratorKind { dopri5, bdf };
@@ -116,6 +166,10 @@ struct SolverSettings {
   double baumgarte_beta = 100.0;
 };
 
+struct Model;
+/// Whether driver d drives an angle (rad, its multiplier a torque) rather than a length (m).
+bool driver_is_rotary(const Model& model, const Driver& d);
+
 struct Model {
   std::string name;
   std::string source;          ///< the file it was read from, if any
@@ -123,8 +177,10 @@ struct Model {
   std::vector<Joint> joints;
   std::vector<Driver> drivers;
   std::vector<Load> loads;
+  std::vector<Sensor> sensors;
   Vec2 gravity = Vec2::Zero();
   SolverSettings solver;
+  bool finalized = false;      ///< set by finalize()
 
   /// Number of clearance joints.
   int clearance_joint_count() const;

@@ -5,6 +5,8 @@
 #include <limits>
 #include <sstream>
 
+#include "core/elements/clearance_revolute.hpp"
+
 namespace lash {
 
 namespace {
@@ -78,13 +80,29 @@ void Simulator::start(double t, const Eigen::VectorXd& y, const std::vector<Cont
     if (modes && (*modes)[k].in_contact == (delta > 0.0))
       ws_.contact[k] = (*modes)[k];
     else
-      ws_.contact[k] = {delta > 0.0, std::abs(delta_dot)};
+      ws_.contact[k] = {delta > 0.0};
   }
   t_ = t;
   y_ = y;
+  for (int k = 0; k < ws_.nc; ++k) {
+    double delta, delta_dot;
+    clearance_gap(model_, ws_, k, y.data(), delta, delta_dot);
+    if (ws_.contact[k].in_contact && !(modes && (*modes)[k].in_contact))
+      y_[ws_.aux_impact[k]] = std::abs(delta_dot);
+  }
   status_ = RunStatus{};
-  integrator_->reset(t, y);
+  integrator_->reset(t, y_);
 }
+
+void Simulator::resume(const State& state) {
+  ws_.contact = state.modes;
+  t_ = state.t;
+  y_ = state.y;
+  status_ = RunStatus{};
+  integrator_->reset(t_, y_, state.step);
+}
+
+State Simulator::snapshot() const { return {t_, y_, ws_.contact, integrator_->step_hint()}; }
 
 bool Simulator::advance_to(double t_target, Observer* observer) {
   while (t_ < t_target) {
@@ -105,10 +123,10 @@ bool Simulator::advance_to(double t_target, Observer* observer) {
       for (int c = 0; c < ws_.nc; ++c) {
         double delta, delta_dot;
         clearance_gap(model_, ws_, c, y_.data(), delta, delta_dot);
-        ContactState& cs = ws_.contact[c];
+        const ContactState& cs = ws_.contact[c];
         if ((cs.in_contact && delta < -kModeTolerance) || (!cs.in_contact && delta > kModeTolerance)) {
-          cs.in_contact = !cs.in_contact;
-          if (cs.in_contact) cs.impact_velocity = std::max(delta_dot, 0.0);
+          clearance_event(model_, ws_, c, y_);
+          if (cs.in_contact) y_[ws_.aux_impact[c]] = std::max(delta_dot, 0.0);
           ++ws_.missed_events;
           if (observer) observer->event({t_, c, cs.in_contact, delta_dot}, ws_);
           fixed = true;
@@ -136,12 +154,8 @@ bool Simulator::advance_to(double t_target, Observer* observer) {
     }
     for (int c = 0; c < ws_.nc; ++c) {
       if (!(g_event_[c] >= 0.0 || c == first)) continue;
-      double delta, delta_dot;
-      clearance_gap(model_, ws_, c, y_.data(), delta, delta_dot);
-      ContactState& cs = ws_.contact[c];
-      cs.in_contact = !cs.in_contact;
-      if (cs.in_contact) cs.impact_velocity = delta_dot;
-      if (observer) observer->event({adv.t, c, cs.in_contact, delta_dot}, ws_);
+      const double delta_dot = clearance_event(model_, ws_, c, y_);
+      if (observer) observer->event({adv.t, c, ws_.contact[c].in_contact, delta_dot}, ws_);
     }
     integrator_->reset(adv.t, y_);
   }
@@ -171,6 +185,9 @@ SectionPlane parse_section_plane(const Model& model, const std::string& spec) {
   int f = -1;
   for (int i = 0; i < 6; ++i)
     if (field == fields[i]) f = i;
+  if (b >= 0 && !model.bodies[b].rotates() && (f == 2 || f == 5))
+    throw std::invalid_argument("section plane '" + spec + "': body '" + body +
+                                "' is a point mass, which has no angle");
   if (b < 0 || f < 0)
     throw std::invalid_argument("section plane '" + spec + "': no body '" + body +
                                 "' or no quantity '" + field + "' (x, y, phi, vx, vy, omega)");
@@ -182,31 +199,72 @@ SectionPlane parse_section_plane(const Model& model, const std::string& spec) {
     throw std::invalid_argument("section plane '" + spec + "': value '" + value +
                                 "' is not a number");
   }
-  const int nq = 3 * static_cast<int>(model.bodies.size());
-  p.index = f < 3 ? 3 * b + f : nq + 3 * b + (f - 3);
+  // Indices into y follow the coordinate blocks (rigid: x, y, φ; point mass: x, y).
+  int offset = 0, nq = 0;
+  for (size_t i = 0; i < model.bodies.size(); ++i) {
+    const int size = model.bodies[i].rotates() ? 3 : 2;
+    if (static_cast<int>(i) == b) offset = nq;
+    nq += size;
+  }
+  p.index = f < 3 ? offset + f : nq + offset + (f - 3);
   return p;
 }
 
+std::string state_mismatch(const Workspace& ws, const State& state) {
+  std::ostringstream s;
+  if (state.y.size() != ws.ny)
+    s << "the state has " << state.y.size() << " values but this model needs " << ws.ny
+      << " (" << ws.nq << " coordinates, " << ws.nq << " velocities, " << ws.na
+      << " auxiliary states, 2 energy integrals)";
+  else if (static_cast<int>(state.modes.size()) != ws.nc)
+    s << "the state has " << state.modes.size() << " contact modes but this model has " << ws.nc
+      << " clearance joints";
+  else if (!state.y.allFinite() || !std::isfinite(state.t))
+    s << "the state holds a value that is not finite";
+  return s.str();
+}
+
 RunResult simulate(const Model& model, Workspace& ws, Observer& observer,
-                   const SectionSchedule& sections, const std::vector<SectionPlane>& planes) {
+                   const SectionSchedule& sections, const std::vector<SectionPlane>& planes,
+                   const RunOptions& options) {
   const auto wall0 = std::chrono::steady_clock::now();
   const SolverSettings& s = model.solver;
   RunResult result;
-  Eigen::VectorXd y = initial_state(model, ws);
-  Eigen::VectorXd ydot(ws.ny);
   Simulator sim(model, ws, planes);
   result.integrator = sim.integrator_name();
-  sim.start(0.0, y);
+  double t0 = 0.0;
+  if (options.from) {
+    if (const std::string bad = state_mismatch(ws, *options.from); !bad.empty())
+      throw std::invalid_argument("cannot continue from the given state: " + bad);
+    t0 = options.from->t;
+    if (!(t0 < s.end_time))
+      throw std::invalid_argument("cannot continue from the given state: it is at t = " +
+                                  std::to_string(t0) + " s, not before end_time = " +
+                                  std::to_string(s.end_time) +
+                                  " s; raise solver.end_time (--set solver.end_time=...)");
+    sim.resume(*options.from);
+  } else {
+    sim.start(0.0, initial_state(model, ws));
+  }
+  Eigen::VectorXd y = sim.state();
+  Eigen::VectorXd ydot(ws.ny);
 
-  // Outputs every interval, and at end_time when it is not a multiple of the interval;
-  // stroboscopic sections merged into the same schedule.
-  const long n_out = static_cast<long>(std::ceil(s.end_time / s.output_interval - 1e-9));
+  // Outputs at k·interval on one global grid (so a continued run lands on the same times), and
+  // at end_time when it is not a multiple of the interval; stroboscopic sections merged in.
+  const double dt = s.output_interval;
+  const long n_out = static_cast<long>(std::ceil(s.end_time / dt - 1e-9));
+  long k_first = static_cast<long>(std::floor(t0 / dt + 1e-9)) + 1;
   long k_section = 0;
   auto next_section = [&]() {
     return sections.period > 0.0 ? sections.start + k_section * sections.period
                                  : std::numeric_limits<double>::infinity();
   };
-  while (sections.period > 0.0 && next_section() < 0.0) ++k_section;
+  while (sections.period > 0.0 && next_section() < t0) ++k_section;
+  auto is_restart = [&](double t) {
+    for (double r : options.restarts)
+      if (std::abs(r - t) <= 1e-12 * std::max(1.0, std::abs(t))) return true;
+    return false;
+  };
 
   auto evaluate_here = [&](double t) {
     const bool finite = evaluate(model, ws, t, y.data(), ydot.data());
@@ -228,13 +286,13 @@ RunResult simulate(const Model& model, Workspace& ws, Observer& observer,
   };
 
   bool ok = true;
-  if (next_section() <= 0.0) {
-    if ((ok = evaluate_here(0.0))) observer.section(0.0, y, ws);
+  if (next_section() <= t0) {
+    if ((ok = evaluate_here(t0))) observer.section(t0, y, ws);
     ++k_section;
   }
-  ok = ok && emit(0.0);
-  for (long k = 1; ok && k <= n_out;) {
-    const double t_out = std::min(k * s.output_interval, s.end_time);
+  ok = ok && emit(t0);
+  for (long k = k_first; ok && k <= n_out && t0 < s.end_time;) {
+    const double t_out = std::min(k * dt, s.end_time);
     const double t_sec = next_section();
     const bool is_section = t_sec < t_out - 1e-12 * t_out && t_sec <= s.end_time;
     const double target = is_section ? t_sec : t_out;
@@ -256,9 +314,11 @@ RunResult simulate(const Model& model, Workspace& ws, Observer& observer,
       ++k_section;
     }
     ok = emit(t_out);
+    if (ok && is_restart(t_out)) sim.resume(sim.snapshot());  // as at an event
     ++k;
   }
   if (result.status.ok) result.status.t = s.end_time;  // the time reached
+  result.final_state = sim.snapshot();
   result.stats = sim.stats();
   result.missed_events = ws.missed_events;
   result.wall_seconds =

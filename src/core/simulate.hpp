@@ -14,6 +14,17 @@
 
 namespace lash {
 
+/// Everything a run needs to continue: time, the ODE state y (coordinates, velocities,
+/// auxiliary states, energy integrals; layout in Workspace) and the discrete modes of the
+/// clearance joints, plus the integrator's next step size so that a continued run takes the
+/// same steps as one that never stopped.
+struct State {
+  double t = 0.0;
+  Eigen::VectorXd y;
+  std::vector<ContactState> modes;  ///< per clearance joint
+  double step = 0.0;                ///< next step size to try, s (0: the integrator chooses)
+};
+
 /// A located contact onset or separation of one clearance joint.
 struct ContactEvent {
   double t = 0.0;
@@ -65,6 +76,15 @@ struct RunResult {
   double max_constraint_violation = 0.0;
   long outputs = 0;
   long missed_events = 0;  ///< mode corrections at outputs (crossings no event function saw)
+  State final_state;       ///< where the run stopped (the failure time on a failure)
+};
+
+/// Options of one run beyond the model's solver settings.
+struct RunOptions {
+  const State* from = nullptr;   ///< continue from this state instead of the initial state
+  /// Times (on the output grid) at which the integrator restarts as it does at an event; a run
+  /// that stops at such a time and is continued with `from` gives bit-identical results.
+  std::vector<double> restarts;
 };
 
 /// Integrates one model forward with its contact events, from a state the caller sets: the
@@ -76,6 +96,10 @@ class Simulator {
   /// Starts from y at time t; each joint's mode follows the sign of its gap (δ̇⁻ = |δ̇| if in
   /// contact), or `modes` (e.g. a nearby trajectory's) where they agree with that sign.
   void start(double t, const Eigen::VectorXd& y, const std::vector<ContactState>* modes = nullptr);
+  /// Continues from a saved state exactly: its modes and its step size as they are.
+  void resume(const State& state);
+  /// The current state, ready to be saved and resumed.
+  State snapshot() const;
   /// Integrates to t_target, handling contact events and plane crossings (reported to
   /// `observer` when given: event() and section()).
   /// Returns false on a numerical failure; status() says what happened.
@@ -100,7 +124,10 @@ class Simulator {
 /// Throws std::runtime_error only when no consistent initial state exists.
 RunResult simulate(const Model& model, Workspace& ws, Observer& observer,
                    const SectionSchedule& sections = {},
-                   const std::vector<SectionPlane>& planes = {});
+                   const std::vector<SectionPlane>& planes = {}, const RunOptions& options = {});
+
+/// Checks that `state` fits the model's workspace layout; returns "" or what differs.
+std::string state_mismatch(const Workspace& ws, const State& state);
 
 /// Parses "<body>.<x|y|phi|vx|vy|omega>=VALUE[,down]" into a plane; throws
 /// std::invalid_argument naming what is wrong.

@@ -1,5 +1,7 @@
 #include "io/model_loader.hpp"
 
+#include "core/finalize.hpp"
+
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
@@ -158,7 +160,7 @@ class Loader {
     Model m;
     Section top(r_, root, root, "model",
                 {"name", "description", "gravity", "ground", "bodies", "joints",
-                 "clearance_defaults", "drivers", "loads", "solver"});
+                 "clearance_defaults", "drivers", "loads", "sensors", "solver"});
     if (!root.IsMap()) throw ModelError(r_.list);
     m.name = top.text("name").value_or("model");
     m.gravity = top.vec2("gravity", " (m/s²)").value_or(Vec2::Zero());
@@ -170,8 +172,19 @@ class Loader {
     read_joints(m, top.get("joints"), root);
     read_drivers(m, top.get("drivers"));
     read_loads(m, top.get("loads"));
+    read_sensors(m, top.get("sensors"));
     read_solver(m, top.get("solver"), root);
     if (!r_.list.empty()) throw ModelError(r_.list);
+    // Derived values and the element kinds' own checks: the same for every source of a model.
+    try {
+      finalize(m);
+    } catch (const InvalidModel& e) {
+      for (const auto& p : e.problems()) {
+        const auto it = nodes_.find(p.element);
+        r_.error(it != nodes_.end() ? it->second : root, p.element, p.message);
+      }
+      throw ModelError(r_.list);
+    }
     return m;
   }
 
@@ -304,7 +317,17 @@ class Loader {
       Body b;
       b.name = name;
       b.mass = s.required_number("mass", " (kg)", positive, 1.0);
-      b.inertia = s.required_number("inertia", " (kg·m² about the centre of mass)", positive, 1.0);
+      nodes_["body '" + name + "'"] = kv.second;
+      if (s.has("inertia")) {
+        b.inertia = s.required_number("inertia", " (kg·m² about the centre of mass)", positive, 1.0);
+      } else {
+        b.type = BodyType::point_mass;  // no inertia: a point mass, coordinates [x, y]
+        for (const char* k : {"angle", "angle_deg", "angular_velocity"})
+          if (s.has(k))
+            r_.error(s.get(k), s.element(),
+                     std::string("a body without 'inertia' is a point mass, which has no angle; "
+                                 "remove '") + k + "' or give 'inertia'");
+      }
       b.r0 = s.vec2("position", " (m)").value_or(Vec2::Zero());
       if (s.has("angle") && s.has("angle_deg"))
         r_.error(s.get("angle_deg"), s.element(), "give 'angle' (rad) or 'angle_deg', not both");
@@ -357,13 +380,16 @@ class Loader {
       } else if (type == "fixed") {
         j.type = JointType::fixed;
         keys.insert(keys.end(), {"base", "attached"});
+      } else if (type == "distance") {
+        j.type = JointType::distance;
+        keys.insert(keys.end(), {"from", "to", "length"});
       } else {
-        const std::vector<std::string> types{"revolute", "translational", "fixed"};
+        const std::vector<std::string> types{"revolute", "translational", "fixed", "distance"};
         const std::string near = closest_match(type, types);
         r_.error(type_node.IsDefined() ? type_node : kv.second, element,
-                 type.empty() ? "missing 'type', expected one of: revolute, translational, fixed"
-                              : "unknown joint type '" + type +
-                                    "', expected one of: revolute, translational, fixed" +
+                 type.empty() ? "missing 'type', expected one of: " + join(types)
+                              : "unknown joint type '" + type + "', expected one of: " +
+                                    join(types) +
                                     (near.empty() ? "" : " (did you mean '" + near + "'?)"));
         continue;
       }
@@ -381,6 +407,10 @@ class Loader {
           else
             j.axis = ax->normalized();
         }
+      } else if (j.type == JointType::distance) {
+        a = point(s, "from");
+        b = point(s, "to");
+        j.length = s.number("length", " (m)", positive).value_or(NAN);
       } else {
         a = point(s, "base");
         b = point(s, "attached");
@@ -399,20 +429,18 @@ class Loader {
       }
       if (j.type == JointType::revolute) read_clearance(s, j);
       joint_nodes_.push_back(kv.second);
+      nodes_[element] = kv.second;
       m.joints.push_back(j);
     }
   }
 
-  struct Material {
-    double e = 0, nu = 0;
-  };
-  std::optional<Material> material(Section& j, const std::string& key) {
+  std::optional<lash::Material> material(Section& j, const std::string& key) {
     if (!j.has(key)) return std::nullopt;  // `j` is the joint merged with its defaults
     const YAML::Node n = j.get(key);
     Section s(r_, n, j.node(), j.element() + " " + key, {"youngs_modulus", "poisson_ratio"});
-    Material mat;
-    mat.e = s.required_number("youngs_modulus", " (Pa)", positive, 207e9);
-    mat.nu = s.required_number("poisson_ratio", "", poisson, 0.3);
+    lash::Material mat;
+    mat.youngs_modulus = s.required_number("youngs_modulus", " (Pa)", positive, 207e9);
+    mat.poisson_ratio = s.required_number("poisson_ratio", "", poisson, 0.3);
     return mat;
   }
 
@@ -496,9 +524,9 @@ class Loader {
         r_.error(s.node(), s.element(),
                  "give the contact 'stiffness' or a 'material' {youngs_modulus, poisson_ratio} "
                  "(here or in clearance_defaults)");
-      } else {
-        cl.contact.stiffness = hertz_cylinder_stiffness(cl.bearing_radius, cl.journal_radius,
-                                                        mb->e, mb->nu, mj->e, mj->nu);
+      } else {  // the stiffness is derived from the materials by finalize
+        cl.journal_material = mj;
+        cl.bearing_material = mb;
       }
     }
     const bool damped = cl.normal_law == NormalLaw::hunt_crossley ||
@@ -521,7 +549,8 @@ class Loader {
   void read_friction(Section& c, const std::string& element, Clearance& cl) {
     if (!c.has("friction")) return;
     Section f(r_, c.get("friction"), c.node(), element + " friction",
-              {"law", "mu", "v0", "v1", "mu_static", "mu_dynamic", "v_static", "v_dynamic"});
+              {"law", "mu", "v0", "v1", "mu_static", "mu_dynamic", "v_static", "v_dynamic",
+               "sigma0", "sigma1", "sigma2", "v_stribeck", "v_damping"});
     const std::string law = f.text("law").value_or("none");
     const auto l = friction_law_from_name(law);
     if (!l) {
@@ -556,6 +585,20 @@ class Loader {
                    "v_dynamic must be > v_static, got v_static = " + fmt_num(p.v_static) +
                        ", v_dynamic = " + fmt_num(p.v_dynamic));
         break;
+      case FrictionLaw::lugre: {
+        LuGreParams& g = cl.lugre;
+        g.sigma0 = f.required_number("sigma0", " (bristle stiffness per newton of normal force, 1/m)", positive, 1e5);
+        g.sigma1 = f.required_number("sigma1", " (bristle damping per newton, s/m)", non_negative, 0);
+        g.sigma2 = f.number("sigma2", " (viscous friction per newton, s/m)", non_negative).value_or(0.0);
+        g.mu_static = f.required_number("mu_static", "", positive, 0.1);
+        g.mu_dynamic = f.required_number("mu_dynamic", "", positive, 0.1);
+        g.v_stribeck = f.required_number("v_stribeck", " (m/s)", positive, 1e-3);
+        g.v_damping = f.number("v_damping", " (m/s)", non_negative).value_or(0.0);
+        if (g.mu_static < g.mu_dynamic)
+          r_.error(f.get("mu_static"), f.element(), "mu_static must be >= mu_dynamic, got " +
+                                                        fmt_num(g.mu_static) + " < " + fmt_num(g.mu_dynamic));
+        break;
+      }
     }
   }
 
@@ -568,73 +611,107 @@ class Loader {
     for (const auto& kv : n) {
       const std::string name = kv.first.as<std::string>("");
       Section s(r_, kv.second, kv.first, "driver '" + name + "'",
-                {"joint", "speed_rpm", "speed", "motion", "initial"});
+                {"joint", "body", "coordinate", "speed_rpm", "speed", "motion", "initial"});
+      nodes_[s.element()] = kv.second;
       Driver d;
       d.name = name;
-      const auto joint = s.text("joint");
-      if (!joint) {
-        if (!s.has("joint")) r_.error(s.node(), s.element(), "missing required key 'joint'");
+      if (s.has("joint") == s.has("body")) {
+        r_.error(s.node(), s.element(),
+                 "give either 'joint' (drive a joint coordinate) or 'body' (drive a body's "
+                 "coordinate relative to the ground), got " +
+                     std::string(s.has("joint") ? "both" : "neither"));
         continue;
       }
-      std::vector<std::string> names;
-      for (size_t i = 0; i < m.joints.size(); ++i) {
-        names.push_back(m.joints[i].name);
-        if (m.joints[i].name == *joint) d.joint = static_cast<int>(i);
-      }
-      if (d.joint < 0) {
-        const std::string near = closest_match(*joint, names);
-        r_.error(s.get("joint"), s.element(),
-                 "unknown joint '" + *joint + "'" +
-                     (near.empty() ? "" : ", did you mean '" + near + "'?"));
-        continue;
-      }
-      const Joint& j = m.joints[d.joint];
-      if (j.type == JointType::fixed || j.clearance) {
-        r_.error(s.get("joint"), s.element(),
-                 "joint '" + *joint + "' is " +
-                     (j.clearance ? "a clearance joint" : std::string("a fixed joint")) +
-                     ", expected an ideal revolute or translational joint");
-        continue;
+      if (s.has("body")) {
+        d.target = DriverTarget::body;
+        const auto b = body_ref(s, s.get("body"));
+        if (!b) continue;
+        if (*b == kGround) {
+          r_.error(s.get("body"), s.element(), "the ground cannot be driven");
+          continue;
+        }
+        d.body = *b;
+        const std::string coord = s.text("coordinate").value_or("phi");
+        if (coord == "x") d.coordinate = BodyCoordinate::x;
+        else if (coord == "y") d.coordinate = BodyCoordinate::y;
+        else if (coord == "phi") d.coordinate = BodyCoordinate::phi;
+        else {
+          r_.error(s.get("coordinate"), s.element(),
+                   "unknown coordinate '" + coord + "', expected one of: x, y, phi");
+          continue;
+        }
+        if (d.coordinate == BodyCoordinate::phi && !m.bodies[d.body].rotates()) {
+          r_.error(s.get("body"), s.element(),
+                   "body '" + m.bodies[d.body].name +
+                       "' is a point mass (no inertia): it has no angle to drive; give "
+                       "coordinate: x or y");
+          continue;
+        }
+      } else {
+        if (s.has("coordinate"))
+          r_.error(s.get("coordinate"), s.element(), "'coordinate' goes with 'body', not 'joint'");
+        const auto joint = s.text("joint");
+        if (!joint) continue;
+        std::vector<std::string> names;
+        for (size_t i = 0; i < m.joints.size(); ++i) {
+          names.push_back(m.joints[i].name);
+          if (m.joints[i].name == *joint) d.joint = static_cast<int>(i);
+        }
+        if (d.joint < 0) {
+          const std::string near = closest_match(*joint, names);
+          r_.error(s.get("joint"), s.element(),
+                   "unknown joint '" + *joint + "'" +
+                       (near.empty() ? "" : ", did you mean '" + near + "'?"));
+          continue;
+        }
+        const Joint& j = m.joints[d.joint];
+        if ((j.type != JointType::revolute && j.type != JointType::translational) ||
+            j.clearance) {
+          r_.error(s.get("joint"), s.element(),
+                   "joint '" + *joint + "' is " +
+                       (j.clearance ? std::string("a clearance joint") : "not revolute or translational") +
+                       ", expected an ideal revolute or translational joint; to drive a body "
+                       "whose joint has clearance, give 'body' and 'coordinate' instead");
+          continue;
+        }
       }
       const int given = s.has("speed_rpm") + s.has("speed") + s.has("motion");
       if (given != 1) {
         r_.error(s.node(), s.element(),
-                 "give exactly one of speed_rpm, speed (rad/s or m/s) or motion (expression of "
-                 "time), got " + std::to_string(given));
+                 "give exactly one of speed_rpm, speed (rad/s or m/s, or an expression of time) "
+                 "or motion (expression of time), got " + std::to_string(given));
         continue;
       }
+      const bool rotary = driver_is_rotary(m, d);
+      auto time_expression = [&](const std::string& key, const std::string& text) {
+        std::string err = check_expression(text, {});
+        if (!err.empty() && check_expression(text, body_names_).empty())
+          err = "a prescribed motion must be a function of time only";
+        if (!err.empty()) r_.error(s.get(key), s.element(), "bad expression in '" + key + "': " + err);
+      };
       if (auto rpm = s.number("speed_rpm", " (rev/min)")) {
-        if (j.type != JointType::revolute)
-          r_.error(s.get("speed_rpm"), s.element(), "speed_rpm needs a revolute joint");
+        if (!rotary) r_.error(s.get("speed_rpm"), s.element(), "speed_rpm needs an angle to drive");
         d.speed = *rpm * 2.0 * M_PI / 60.0;
       }
-      if (auto sp = s.number("speed", " (rad/s or m/s)")) d.speed = *sp;
+      if (s.has("speed")) {
+        double v;
+        const YAML::Node sn = s.get("speed");
+        if (sn.IsScalar() && YAML::convert<double>::decode(sn, v) && std::isfinite(v)) {
+          d.speed = v;
+        } else if (sn.IsScalar()) {  // a speed profile: an expression of time, integrated
+          d.profile = DriverProfile::speed;
+          d.expression = sn.Scalar();
+          time_expression("speed", d.expression);
+        } else {
+          r_.error(sn, s.element(), "speed must be a number (rad/s or m/s) or an expression of time");
+        }
+      }
       if (auto ex = s.text("motion")) {
-        d.profile = DriverProfile::expression;
+        d.profile = DriverProfile::position;
         d.expression = *ex;
-        std::string err = check_expression(*ex, {});
-        if (!err.empty() && check_expression(*ex, body_names_).empty())
-          err = "a prescribed motion must be a function of time only";
-        if (!err.empty()) r_.error(s.get("motion"), s.element(), "bad expression: " + err);
+        time_expression("motion", *ex);
       }
-      // Initial coordinate: from the initial poses unless given.
-      if (j.type == JointType::revolute) {
-        const double pa = j.a.body == kGround ? 0.0 : m.bodies[j.a.body].phi0;
-        const double pb = j.b.body == kGround ? 0.0 : m.bodies[j.b.body].phi0;
-        d.initial = pa - pb;
-      } else {
-        auto pose = [&](const PointRef& p, Eigen::Matrix2d& A) {
-          if (p.body == kGround) {
-            A.setIdentity();
-            return Vec2(p.s);
-          }
-          A = rotation(m.bodies[p.body].phi0);
-          return Vec2(m.bodies[p.body].r0 + A * p.s);
-        };
-        Eigen::Matrix2d Aa, Ab;
-        const Vec2 ra = pose(j.a, Aa), rb = pose(j.b, Ab);
-        d.initial = (rb - ra).dot(Aa * j.axis);
-      }
+      // Initial coordinate: given, else derived from the initial poses by finalize.
       if (auto init = s.number("initial", " (rad or m)")) d.initial = *init;
       m.drivers.push_back(d);
     }
@@ -652,7 +729,8 @@ class Loader {
       const YAML::Node tn = kv.second.IsMap() ? kv.second["type"] : YAML::Node();
       const std::string type = tn.IsDefined() ? tn.as<std::string>("") : "";
       const std::vector<std::string> types{"force", "torque", "spring_damper",
-                                           "torsional_spring_damper"};
+                                           "torsional_spring_damper", "bushing"};
+      nodes_[element] = kv.second;
       Load l;
       l.name = name;
       auto expr = [&](Section& s, const std::string& key, std::string& out) {
@@ -680,16 +758,7 @@ class Loader {
         auto a = point(s, "from"), b = point(s, "to");
         l.stiffness = s.number("stiffness", " (N/m)", non_negative).value_or(0.0);
         l.damping = s.number("damping", " (N·s/m)", non_negative).value_or(0.0);
-        if (a && b) {
-          l.a = *a;
-          l.b = *b;
-          auto world = [&](const PointRef& p) {
-            return p.body == kGround
-                       ? Vec2(p.s)
-                       : Vec2(m.bodies[p.body].r0 + rotation(m.bodies[p.body].phi0) * p.s);
-          };
-          l.free_length = (world(*b) - world(*a)).norm();
-        }
+        if (a && b) l.a = *a, l.b = *b;  // free_length: the initial length unless given
         if (auto fl = s.number("free_length", " (m)", non_negative)) l.free_length = *fl;
       } else if (type == "torsional_spring_damper") {
         Section s(r_, kv.second, kv.first, element,
@@ -701,16 +770,38 @@ class Loader {
                    "'bodies' must be a pair [body_a, body_b]");
         } else {
           auto a = body_ref(s, bn[0]), b = body_ref(s, bn[1]);
-          if (a && b) {
-            l.body_a = *a;
-            l.body_b = *b;
-            const double pa = *a == kGround ? 0.0 : m.bodies[*a].phi0;
-            const double pb = *b == kGround ? 0.0 : m.bodies[*b].phi0;
-            l.angle0 = pb - pa;
-          }
+          if (a && b) l.body_a = *a, l.body_b = *b;  // free_angle: initial unless given
         }
         l.stiffness = s.number("stiffness", " (N·m/rad)", non_negative).value_or(0.0);
         l.damping = s.number("damping", " (N·m·s/rad)", non_negative).value_or(0.0);
+        if (auto fa = s.number("free_angle", " (rad)")) l.angle0 = *fa;
+      } else if (type == "bushing") {
+        Section s(r_, kv.second, kv.first, element,
+                  {"type", "from", "to", "frame", "stiffness", "damping", "torsional_stiffness",
+                   "torsional_damping", "free_angle"});
+        l.type = LoadType::bushing;
+        auto a = point(s, "from"), b = point(s, "to");
+        if (a && b) l.a = *a, l.b = *b;
+        // Axes of the frame body (default: the `from` body); stiffness and damping per axis.
+        l.frame_body = a ? a->body : kGround;
+        if (s.has("frame"))
+          if (auto fb = body_ref(s, s.get("frame"))) l.frame_body = *fb;
+        auto pair = [&](const std::string& key, const char* unit) -> Vec2 {
+          if (!s.has(key)) return Vec2::Zero();
+          double v;
+          const YAML::Node n = s.get(key);
+          if (n.IsScalar() && YAML::convert<double>::decode(n, v) && v >= 0 && std::isfinite(v))
+            return Vec2(v, v);
+          if (auto p = s.vec2(key, unit)) {
+            if ((p->array() >= 0).all()) return *p;
+          }
+          r_.error(n, element, "'" + key + "' must be a number >= 0 or a pair [x, y] of them" + unit);
+          return Vec2::Zero();
+        };
+        l.stiffness_xy = pair("stiffness", " (N/m)");
+        l.damping_xy = pair("damping", " (N·s/m)");
+        l.stiffness = s.number("torsional_stiffness", " (N·m/rad)", non_negative).value_or(0.0);
+        l.damping = s.number("torsional_damping", " (N·m·s/rad)", non_negative).value_or(0.0);
         if (auto fa = s.number("free_angle", " (rad)")) l.angle0 = *fa;
       } else {
         const std::string near = closest_match(type, types);
@@ -721,6 +812,59 @@ class Loader {
         continue;
       }
       m.loads.push_back(l);
+    }
+  }
+
+  void read_sensors(Model& m, const YAML::Node& n) {
+    if (!n.IsDefined() || n.IsNull()) return;
+    if (!n.IsMap()) {
+      r_.error(n, "model", "'sensors' must be a map name: {type: ..., at: body.marker}, got " +
+                               Section::kind(n));
+      return;
+    }
+    const std::vector<std::string> types{"accelerometer", "velocity", "displacement"};
+    for (const auto& kv : n) {
+      const std::string name = kv.first.as<std::string>("");
+      const std::string element = "sensor '" + name + "'";
+      Section s(r_, kv.second, kv.first, element,
+                {"type", "at", "axis", "frame", "gravity", "mass"});
+      nodes_[element] = kv.second;
+      Sensor sn;
+      sn.name = name;
+      const std::string type = s.text("type").value_or("");
+      const auto it = std::find(types.begin(), types.end(), type);
+      if (it == types.end()) {
+        const std::string near = closest_match(type, types);
+        r_.error(s.has("type") ? s.get("type") : s.node(), element,
+                 (type.empty() ? std::string("missing 'type'") : "unknown sensor type '" + type + "'") +
+                     ", expected one of: " + join(types) +
+                     (near.empty() || type.empty() ? "" : " (did you mean '" + near + "'?)"));
+        continue;
+      }
+      sn.type = static_cast<SensorType>(it - types.begin());
+      if (auto p = point(s, "at")) {
+        sn.at = *p;
+        if (p->body == kGround) r_.error(s.get("at"), element, "a sensor must be on a body, not the ground");
+      }
+      if (auto ax = s.vec2("axis", " (direction)")) {
+        if (ax->norm() < 1e-12) r_.error(s.get("axis"), element, "axis must be a non-zero vector, got [0, 0]");
+        else sn.axis = ax->normalized();
+      }
+      const std::string frame = s.text("frame").value_or("body");
+      if (frame == "ground") sn.body_axis = false;
+      else if (frame != "body")
+        r_.error(s.get("frame"), element, "frame must be 'body' (axis turns with the body) or "
+                                          "'ground', got '" + frame + "'");
+      if (s.has("gravity")) {
+        bool g;
+        if (YAML::convert<bool>::decode(s.get("gravity"), g)) sn.gravity = g;
+        else r_.error(s.get("gravity"), element, "gravity must be true (specific force, as a real "
+                                                 "accelerometer reads) or false (kinematic acceleration)");
+        if (sn.type != SensorType::accelerometer)
+          r_.error(s.get("gravity"), element, "'gravity' applies to accelerometers only");
+      }
+      sn.mass = s.number("mass", " (kg, added at the sensor's point)", non_negative).value_or(0.0);
+      m.sensors.push_back(sn);
     }
   }
 
@@ -769,6 +913,7 @@ class Loader {
   std::vector<std::vector<Marker>> markers_;
   std::vector<Marker> ground_markers_;
   std::vector<YAML::Node> joint_nodes_;
+  std::map<std::string, YAML::Node> nodes_;  ///< element ("joint 'x'") → its node, for finalize
 };
 
 /// Copies a parsed node without its source marks, so diagnostics say "value set with --set".

@@ -68,14 +68,21 @@ class Decimator {
   std::vector<size_t> imn_, imx_;
 };
 
+/// The channel names of a model, in column order.
+std::vector<std::string> names_of(const Model& m) {
+  std::vector<std::string> n;
+  for (const auto& c : channel_info(m, Workspace(m))) n.push_back(c.name);
+  return n;
+}
+
 /// Keeps every output of every channel (the ideal twin, compared sample by sample).
 class Keeper : public Observer {
  public:
-  explicit Keeper(const Model& m) : model_(m), names(channel_names(m)), v_(names.size()) {
+  explicit Keeper(const Model& m) : model_(m), names(names_of(m)), v_(names.size()) {
     data.resize(names.size());
   }
   void output(double, const Eigen::VectorXd& y, const Workspace& ws) override {
-    channel_values(model_, ws, y, v_);
+    channel_values(model_, ws, y, v_.data());
     for (size_t i = 0; i < v_.size(); ++i) data[i].push_back(v_[i]);
   }
   const Model& model_;
@@ -97,7 +104,7 @@ class Collector : public Observer {
  public:
   Collector(const Model& m, const Workspace& ws, const ReportOptions& o, size_t n_out,
             ResultsWriter* writer, Observer* progress)
-      : model_(m), names(channel_names(m)), v_(names.size()),
+      : model_(m), names(names_of(m)), v_(names.size()),
         dec(names.size(), (n_out + o.display_points - 1) / o.display_points),
         stats(names.size()), writer_(writer), progress_(progress) {
     frame_every_ = std::max<size_t>(1, n_out / std::max<size_t>(1, o.frames));
@@ -114,7 +121,7 @@ class Collector : public Observer {
   void output(double t, const Eigen::VectorXd& y, const Workspace& ws) override {
     if (writer_) writer_->output(t, y, ws);
     if (progress_) progress_->output(t, y, ws);
-    channel_values(model_, ws, y, v_);
+    channel_values(model_, ws, y, v_.data());
     if (k_ == 0)
       for (int c = 0; c < ws.nc; ++c) events[c].in_contact_at_start = ws.contact[c].in_contact;
     dec.add(t, v_);
@@ -135,8 +142,11 @@ class Collector : public Observer {
     if (k_ % frame_every_ == 0) {
       frame_t.push_back(t);
       std::vector<double> f;
-      for (int b = 0; b < ws.nb; ++b)
-        for (int j = 0; j < 3; ++j) f.push_back(y[3 * b + j]);
+      for (int b = 0; b < ws.nb; ++b) {  // x, y, φ per body (φ = 0 for a point mass)
+        f.push_back(ws.kin[b].r.x());
+        f.push_back(ws.kin[b].r.y());
+        f.push_back(ws.kin[b].phi);
+      }
       for (int c = 0; c < ws.nc; ++c) {
         f.push_back(ws.clearance_out[c].e.x());
         f.push_back(ws.clearance_out[c].e.y());
@@ -177,10 +187,11 @@ class Collector : public Observer {
     }
     if (ws.nc == 0)  // no clearance joint: the bodies' positions, angles as cos/sin (mod 2π)
       for (int b = 0; b < ws.nb; ++b) {
-        p.push_back(y[3 * b]);
-        p.push_back(y[3 * b + 1]);
-        p.push_back(std::cos(y[3 * b + 2]) * 1e-2);  // 1 cm lever: comparable to positions
-        p.push_back(std::sin(y[3 * b + 2]) * 1e-2);
+        const BodyKin k = body_kin(ws, b, y.data());
+        p.push_back(k.r.x());
+        p.push_back(k.r.y());
+        p.push_back(std::cos(k.phi) * 1e-2);  // 1 cm lever: comparable to positions
+        p.push_back(std::sin(k.phi) * 1e-2);
       }
     sections.push_back(std::move(p));
     section_t.push_back(t);
@@ -256,11 +267,15 @@ json model_json(const Model& m) {
   }
   j["drivers"] = json::array();
   for (const auto& d : m.drivers)
-    j["drivers"].push_back({{"name", d.name}, {"joint", m.joints[d.joint].name},
-                            {"speed", d.speed},
-                            {"profile", d.profile == DriverProfile::constant_speed ? "constant_speed"
-                                                                                  : "expression"},
-                            {"expression", d.expression}});
+    j["drivers"].push_back(
+        {{"name", d.name},
+         {"joint", d.target == DriverTarget::joint ? m.joints[d.joint].name : std::string()},
+         {"body", d.target == DriverTarget::body ? m.bodies[d.body].name : std::string()},
+         {"speed", d.speed},
+         {"profile", d.profile == DriverProfile::constant_speed ? "constant_speed"
+                     : d.profile == DriverProfile::position     ? "position"
+                                                                : "speed"},
+         {"expression", d.expression}});
   const SolverSettings& s = m.solver;
   j["solver"] = {{"integrator", s.integrator == IntegratorKind::bdf ? "bdf" : "dopri5"},
                  {"rtol", s.rtol}, {"atol", s.atol}, {"end_time", s.end_time},
@@ -271,8 +286,8 @@ json model_json(const Model& m) {
 /// The rotary driver that sets the period: named, else the first constant-speed revolute one.
 const Driver* period_driver(const Model& m, const std::string& name) {
   for (const auto& d : m.drivers) {
-    const bool rotary = m.joints[d.joint].type == JointType::revolute &&
-                        d.profile == DriverProfile::constant_speed && d.speed != 0.0;
+    const bool rotary = driver_is_rotary(m, d) && d.profile == DriverProfile::constant_speed &&
+                        d.speed != 0.0;
     if (name.empty() ? rotary : d.name == name) return rotary ? &d : nullptr;
   }
   return nullptr;
@@ -388,6 +403,12 @@ ReportRun run_with_analysis(const LoadedModel& loaded, const ReportOptions& o,
   }
   json channels = json::object();
   for (size_t i = 0; i < col.names.size(); ++i) channels[col.names[i]] = r6(col.dec.data[i]);
+  // Units and descriptions, as the element kinds declare them (report.js and the figures read
+  // them from here and never guess from a name).
+  json info = json::object();
+  for (const auto& c : channel_info(model, ws))
+    info[c.name] = {{"unit", c.unit}, {"description", c.description}};
+  d["channel_info"] = info;
   series["channels"] = channels;
   if (twin) {
     Decimator td(twin->names.size(), (n_out + o.display_points - 1) / o.display_points);

@@ -1,5 +1,7 @@
 #include "io/results_writer.hpp"
 
+#include "io/state_file.hpp"
+
 #include <fmt/format.h>
 
 #include <charconv>
@@ -10,76 +12,6 @@
 
 namespace lash {
 
-std::vector<std::string> channel_names(const Model& model) {
-  std::vector<std::string> n;
-  for (const auto& b : model.bodies)
-    for (const char* q : {"x", "y", "phi", "vx", "vy", "omega", "ax", "ay", "alpha"})
-      n.push_back(b.name + "." + q);
-  for (const auto& j : model.joints) {
-    if (j.clearance) {
-      for (const char* q : {"ex", "ey", "e", "delta", "delta_dot", "Fn", "Ft", "vt", "mode"})
-        n.push_back(j.name + "." + q);
-    } else {
-      for (const char* q : {"Fx", "Fy", "F"}) n.push_back(j.name + "." + q);
-    }
-  }
-  for (const auto& d : model.drivers)
-    n.push_back(d.name + (model.joints[d.joint].type == JointType::revolute ? ".torque" : ".force"));
-  for (const char* q : {"energy.kinetic", "energy.potential", "energy.dissipated", "energy.input",
-                        "energy.balance", "constraint.violation"})
-    n.push_back(q);
-  return n;
-}
-
-void channel_values(const Model& model, const Workspace& ws, const Eigen::VectorXd& y,
-                    std::vector<double>& v) {
-  size_t i = 0;
-  const int nq = ws.nq;
-  for (int b = 0; b < ws.nb; ++b) {
-    for (int k = 0; k < 3; ++k) v[i++] = y[3 * b + k];
-    for (int k = 0; k < 3; ++k) v[i++] = y[nq + 3 * b + k];
-    for (int k = 0; k < 3; ++k) v[i++] = ws.qdd[3 * b + k];
-  }
-  int c = 0;
-  for (size_t ji = 0; ji < model.joints.size(); ++ji) {
-    const Joint& j = model.joints[ji];
-    if (j.clearance) {
-      const ClearanceOutput& o = ws.clearance_out[c];
-      v[i++] = o.e.x();
-      v[i++] = o.e.y();
-      v[i++] = o.e_len;
-      v[i++] = o.delta;
-      v[i++] = o.delta_dot;
-      v[i++] = o.f_n;
-      v[i++] = o.f_t;
-      v[i++] = o.v_t;
-      v[i++] = ws.contact[c].in_contact ? 1.0 : 0.0;
-      ++c;
-      continue;
-    }
-    const int row = ws.row_of_joint[ji];
-    Vec2 f;
-    if (j.type == JointType::translational) {
-      // Normal force on the slider from the guide: λ of the dot row along the guide's normal.
-      const double phi_a = j.a.body == kGround ? 0.0 : y[3 * j.a.body + 2];
-      f = ws.lambda[row + 1] * perp(rotation(phi_a) * j.axis);
-    } else {
-      f = ws.lambda.segment<2>(row);  // force on the journal body from the bearing body
-    }
-    v[i++] = f.x();
-    v[i++] = f.y();
-    v[i++] = f.norm();
-  }
-  for (size_t d = 0; d < model.drivers.size(); ++d) v[i++] = ws.lambda[ws.row_of_driver[d]];
-  const double diss = y[2 * nq], input = y[2 * nq + 1];
-  v[i++] = ws.kinetic;
-  v[i++] = ws.potential;
-  v[i++] = diss;
-  v[i++] = input;
-  v[i++] = ws.kinetic + ws.potential + diss - input;
-  v[i++] = ws.constraint_violation;
-}
-
 ResultsWriter::ResultsWriter(const Model& model, const std::string& folder)
     : model_(model), folder_(folder) {
   std::error_code ec;
@@ -89,12 +21,12 @@ ResultsWriter::ResultsWriter(const Model& model, const std::string& folder)
   if (!ts_ || !ev_)
     throw std::runtime_error("cannot write results to '" + folder + "'" +
                              (ec ? ": " + ec.message() : std::string()));
-  names_ = channel_names(model);
-  values_.assign(names_.size(), 0.0);
-  peaks_.assign(names_.size(), Peak{});
+  channels_ = channel_info(model, Workspace(model));
+  values_.assign(channels_.size(), 0.0);
+  peaks_.assign(channels_.size(), Peak{});
   joints_.assign(model.clearance_joint_count(), JointStats{});
   std::fputs("time", ts_);
-  for (const auto& n : names_) fmt::print(ts_, ",{}", n);
+  for (const auto& c : channels_) fmt::print(ts_, ",{}", c.name);
   std::fputc('\n', ts_);
   std::fputs("time,joint,event,velocity\n", ev_);
 }
@@ -111,7 +43,7 @@ ResultsWriter::~ResultsWriter() {
 }
 
 void ResultsWriter::output(double t, const Eigen::VectorXd& y, const Workspace& ws) {
-  channel_values(model_, ws, y, values_);
+  channel_values(model_, ws, y, values_.data());
   // One buffered row, one write; std::to_chars (%.9g, identical bytes) is ~1.6x faster than
   // fmt's precision formatting, which dominated `lash run` on small models.
   row_.clear();
@@ -161,11 +93,15 @@ void ResultsWriter::finish(const RunResult& r, const std::string& resolved_yaml,
                  {"message", r.status.message}};
   const double span = t_last_ - t_first_;
   json channels = json::object();
-  for (size_t i = 0; i < names_.size(); ++i) {
+  for (size_t i = 0; i < channels_.size(); ++i) {
     const Peak& p = peaks_[i];
-    channels[names_[i]] = {{"min", p.min},     {"t_min", p.t_min},
-                           {"max", p.max},     {"t_max", p.t_max},
-                           {"peak", std::max(std::abs(p.min), std::abs(p.max))}};
+    channels[channels_[i].name] = {{"unit", channels_[i].unit},
+                                   {"description", channels_[i].description},
+                                   {"min", p.min},
+                                   {"t_min", p.t_min},
+                                   {"max", p.max},
+                                   {"t_max", p.t_max},
+                                   {"peak", std::max(std::abs(p.min), std::abs(p.max))}};
   }
   j["channels"] = channels;
   json cj = json::object();
@@ -214,6 +150,8 @@ void ResultsWriter::finish(const RunResult& r, const std::string& resolved_yaml,
                  {"baumgarte_beta", s.baumgarte_beta}};
   std::ofstream(folder_ + "/summary.json") << j.dump(2) << "\n";
   std::ofstream(folder_ + "/model_resolved.yaml") << resolved_yaml << "\n";
+  if (r.final_state.y.size() > 0)
+    write_state(folder_ + "/final_state.json", model_, Workspace(model_), r.final_state);
   std::fclose(ts_);
   std::fclose(ev_);
   ts_ = ev_ = nullptr;

@@ -10,16 +10,10 @@
 #include <string>
 #include <vector>
 
+#include "core/elements/registry.hpp"
 #include "core/simulate.hpp"
 
 namespace lash {
-
-/// Names of the timeseries channels of a model, in column order (without "time").
-std::vector<std::string> channel_names(const Model& model);
-
-/// Fills `values` (size channel_names().size()) from a workspace evaluated at (t, y).
-void channel_values(const Model& model, const Workspace& ws, const Eigen::VectorXd& y,
-                    std::vector<double>& values);
 
 class ResultsWriter : public Observer {
  public:
@@ -30,7 +24,8 @@ class ResultsWriter : public Observer {
   void output(double t, const Eigen::VectorXd& y, const Workspace& ws) override;
   void event(const ContactEvent& e, const Workspace& ws) override;
 
-  /// Writes summary.json and closes the files. `resolved_yaml` is the model as run.
+  /// Writes summary.json (with every channel's unit and description) and final_state.json, and
+  /// closes the files. `resolved_yaml` is the model as run.
   void finish(const RunResult& result, const std::string& resolved_yaml,
               const std::vector<std::string>& overrides);
 
@@ -49,7 +44,7 @@ class ResultsWriter : public Observer {
   std::string folder_;
   std::FILE* ts_ = nullptr;
   std::FILE* ev_ = nullptr;
-  std::vector<std::string> names_;
+  std::vector<ChannelInfo> channels_;
   std::vector<double> values_;
   fmt::memory_buffer row_;
   std::vector<Peak> peaks_;

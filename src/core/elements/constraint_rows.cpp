@@ -1,0 +1,49 @@
+// Constraint rows shared by joint and driver kinds: coincident points, relative angle, and a
+// point's distance along a body-fixed direction (Nikravesh 1988, §4.4 and §11.2).
+#include "core/elements/registry.hpp"
+
+namespace lash {
+
+void revolute_rows(const Workspace& ws, const PointRef& a, const PointRef& b, int row,
+                   ConstraintOut& out) {
+  const BodyKin &ka = ws.kin_of(a.body), &kb = ws.kin_of(b.body);
+  const PointKin pa = point_kin(ka, a.s), pb = point_kin(kb, b.s);
+  out.phi.segment<2>(row) = pa.r - pb.r;
+  const Vec2 ps_a = perp(pa.s), ps_b = perp(pb.s);
+  put_row(out.phi_q, row, ka, 1, 0, ps_a.x());
+  put_row(out.phi_q, row + 1, ka, 0, 1, ps_a.y());
+  put_row(out.phi_q, row, kb, -1, 0, -ps_b.x());
+  put_row(out.phi_q, row + 1, kb, 0, -1, -ps_b.y());
+  if (out.phi_dot) out.phi_dot->segment<2>(row) = pa.v - pb.v;
+  if (out.gamma)
+    out.gamma->segment<2>(row) = pa.s * ka.omega * ka.omega - pb.s * kb.omega * kb.omega;
+}
+
+void angle_row(const Workspace& ws, int body_a, int body_b, double angle0, double f, double fd,
+               double fdd, int row, ConstraintOut& out) {
+  const BodyKin &ka = ws.kin_of(body_a), &kb = ws.kin_of(body_b);
+  out.phi[row] = kb.phi - ka.phi - angle0 - f;
+  put_row(out.phi_q, row, ka, 0, 0, -1);
+  put_row(out.phi_q, row, kb, 0, 0, 1);
+  if (out.phi_dot) (*out.phi_dot)[row] = kb.omega - ka.omega - fd;
+  if (out.gamma) (*out.gamma)[row] = fdd;
+}
+
+void dot_row(const Workspace& ws, const PointRef& a, const PointRef& b, const Vec2& v_body,
+             double f, double fd, double fdd, int row, ConstraintOut& out) {
+  const BodyKin &ka = ws.kin_of(a.body), &kb = ws.kin_of(b.body);
+  const PointKin pa = point_kin(ka, a.s), pb = point_kin(kb, b.s);
+  const Vec2 v = ka.A * v_body, pv = perp(v);
+  const Vec2 d = pb.r - pa.r, dd = pb.v - pa.v;
+  out.phi[row] = v.dot(d) - f;
+  put_row(out.phi_q, row, ka, -v.x(), -v.y(), pv.dot(pb.r - ka.r));
+  put_row(out.phi_q, row, kb, v.x(), v.y(), v.dot(perp(pb.s)));
+  if (out.phi_dot) (*out.phi_dot)[row] = ka.omega * pv.dot(d) + v.dot(dd) - fd;
+  if (out.gamma) {
+    const double quad = -v.dot(d) * ka.omega * ka.omega + 2.0 * ka.omega * pv.dot(dd) +
+                        v.dot(pa.s * ka.omega * ka.omega - pb.s * kb.omega * kb.omega);
+    (*out.gamma)[row] = fdd - quad;
+  }
+}
+
+}  // namespace lash

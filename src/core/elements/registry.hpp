@@ -1,0 +1,148 @@
+#pragma once
+/// @file registry.hpp
+/// Every element kind of the engine, on one screen. A kind provides only what it has —
+/// coordinates and mass (bodies), constraint rows (joints, drivers), applied forces with their
+/// potential energy and power (loads), readings (sensors) — and the channels it emits: name,
+/// unit, description and value written in one place (`ChannelSink`), read by the CSV, the JSON
+/// summary, the report and the figures alike. Clearance joints (gap and event functions, the
+/// map applied at an event, auxiliary states) are in clearance_revolute.hpp. Adding a kind: one
+/// file in core/elements/, one line in a table below, one test.
+#include <Eigen/Core>
+#include <array>
+#include <string>
+#include <vector>
+
+#include "core/dynamics.hpp"
+
+namespace lash {
+
+/// One output channel: `<element>.<quantity>`, its SI unit ("" dimensionless) and meaning.
+struct ChannelInfo {
+  std::string name, unit, description;
+};
+
+/// Collects channels: either their descriptions (once per model) or their values (per output).
+/// Elements call add() in a fixed order, so names and values cannot drift apart.
+class ChannelSink {
+ public:
+  explicit ChannelSink(std::vector<ChannelInfo>* info) : info_(info) {}
+  explicit ChannelSink(double* values) : values_(values) {}
+  /// Prefix of the following channels (an element's name); "" for none.
+  void element(const std::string& name) { prefix_ = &name; }
+  void add(const char* quantity, const char* unit, const char* description, double value) {
+    if (info_)
+      info_->push_back({prefix_->empty() ? quantity : *prefix_ + "." + quantity, unit, description});
+    else
+      values_[n_] = value;
+    ++n_;
+  }
+  size_t count() const { return n_; }
+
+ private:
+  std::vector<ChannelInfo>* info_ = nullptr;
+  double* values_ = nullptr;
+  const std::string* prefix_ = &kNone;
+  size_t n_ = 0;
+  static inline const std::string kNone;
+};
+
+/// Constraint rows being written: Φ, Φ_q and optionally Φ̇ and γ (Φ_q q̈ = γ).
+struct ConstraintOut {
+  Eigen::VectorXd& phi;
+  Eigen::MatrixXd& phi_q;
+  Eigen::VectorXd* phi_dot;
+  Eigen::VectorXd* gamma;
+};
+
+struct BodyKind {
+  const char* name;
+  int coordinates;
+  /// Writes the diagonal of the block's M⁻¹ (block size entries).
+  void (*mass_inverse)(const Body&, double* minv);
+  double (*kinetic_energy)(const Body&, const BodyKin&);
+  /// Channels from the body's kinematics and its block of q̈.
+  void (*channels)(const BodyKin&, const double* qdd, ChannelSink&);
+};
+
+struct JointKind {
+  const char* name;
+  int (*rows)(const Model&, const Joint&);
+  void (*constrain)(const Model&, const Workspace&, const Joint&, int row, ConstraintOut&);
+  /// Reaction channels from the multipliers of its rows.
+  void (*channels)(const Model&, const Workspace&, const Joint&, int row, ChannelSink&);
+};
+
+struct LoadKind {
+  const char* name;
+  /// Adds its generalised forces to ws.g, its energy to ws.potential / dissipated_power /
+  /// input_power and fills ws.load_out[index].
+  void (*apply)(const Model&, Workspace&, const Load&, int index);
+  void (*channels)(const Load&, const LoadOutput&, ChannelSink&);
+};
+
+struct SensorKind {
+  const char* name;
+  /// The reading, from the workspace evaluated at (t, y) (its q̈ included).
+  double (*read)(const Model&, const Workspace&, const Sensor&);
+  const char* quantity;
+  const char* unit;
+  const char* description;
+};
+
+// --- the kinds (one file each) -------------------------------------------------------------
+namespace rigid_body { extern const BodyKind kKind; }
+namespace point_mass { extern const BodyKind kKind; }
+namespace revolute { extern const JointKind kKind; }
+namespace translational { extern const JointKind kKind; }
+namespace fixed_joint { extern const JointKind kKind; }
+namespace distance { extern const JointKind kKind; }
+namespace force_load { extern const LoadKind kKind; }
+namespace torque_load { extern const LoadKind kKind; }
+namespace spring_damper { extern const LoadKind kKind; }
+namespace torsional_spring_damper { extern const LoadKind kKind; }
+namespace bushing { extern const LoadKind kKind; }
+namespace sensors {
+extern const SensorKind kAccelerometer, kVelocity, kDisplacement;
+}
+
+/// Tables indexed by the model's enums (BodyType, JointType, LoadType, SensorType).
+inline const std::array<const BodyKind*, 2> kBodyKinds{&rigid_body::kKind, &point_mass::kKind};
+inline const std::array<const JointKind*, 4> kJointKinds{
+    &revolute::kKind, &translational::kKind, &fixed_joint::kKind, &distance::kKind};
+inline const std::array<const LoadKind*, 5> kLoadKinds{
+    &force_load::kKind, &torque_load::kKind, &spring_damper::kKind,
+    &torsional_spring_damper::kKind, &bushing::kKind};
+inline const std::array<const SensorKind*, 3> kSensorKinds{
+    &sensors::kAccelerometer, &sensors::kVelocity, &sensors::kDisplacement};
+
+inline const BodyKind& kind_of(const Body& b) { return *kBodyKinds[static_cast<int>(b.type)]; }
+inline const JointKind& kind_of(const Joint& j) { return *kJointKinds[static_cast<int>(j.type)]; }
+inline const LoadKind& kind_of(const Load& l) { return *kLoadKinds[static_cast<int>(l.type)]; }
+inline const SensorKind& kind_of(const Sensor& s) {
+  return *kSensorKinds[static_cast<int>(s.type)];
+}
+
+// --- constraint rows shared by several kinds (constraint_rows.cpp) -------------------------
+/// Φ = r_a − r_b (2 rows).
+void revolute_rows(const Workspace& ws, const PointRef& a, const PointRef& b, int row,
+                   ConstraintOut& out);
+/// Φ = φ_b − φ_a − angle0 − f (1 row).
+void angle_row(const Workspace& ws, int body_a, int body_b, double angle0, double f, double fd,
+               double fdd, int row, ConstraintOut& out);
+/// Φ = (A_a v')·(r_b − r_a) − f with v' fixed in body a (1 row).
+void dot_row(const Workspace& ws, const PointRef& a, const PointRef& b, const Vec2& v_body,
+             double f, double fd, double fdd, int row, ConstraintOut& out);
+
+// --- drivers (driver.cpp) ------------------------------------------------------------------
+void driver_constrain(const Model&, const Workspace&, int d, double t, const double* y, int row,
+                      ConstraintOut& out);
+void driver_channels(const Model&, const Workspace&, int d, ChannelSink&);
+
+/// Every channel of a model in column order (without "time").
+std::vector<ChannelInfo> channel_info(const Model& model, const Workspace& ws);
+
+/// Fills `values` (size channel_info().size()) from a workspace evaluated at (t, y).
+void channel_values(const Model& model, const Workspace& ws, const Eigen::VectorXd& y,
+                    double* values);
+
+}  // namespace lash

@@ -1,0 +1,267 @@
+#include "core/finalize.hpp"
+
+#include <cmath>
+#include <map>
+#include <set>
+
+#include "core/elements/registry.hpp"
+
+namespace lash {
+
+namespace {
+
+std::string join_problems(const std::vector<ModelProblem>& p) {
+  std::string s;
+  for (const auto& x : p) s += (s.empty() ? "" : "\n") + x.element + ": " + x.message;
+  return s;
+}
+
+/// Pose of a point at the model's initial poses: world position and its body's rotation.
+Vec2 initial_point(const Model& m, const PointRef& p) {
+  if (p.body == kGround) return p.s;
+  const Body& b = m.bodies[p.body];
+  return b.r0 + rotation(b.phi0) * p.s;
+}
+double initial_angle(const Model& m, int body) {
+  return body == kGround ? 0.0 : m.bodies[body].phi0;
+}
+
+class Checker {
+ public:
+  explicit Checker(Model& m) : m_(m) {}
+
+  void run() {
+    names();
+    for (const Body& b : m_.bodies) body(b);
+    for (Joint& j : m_.joints) joint(j);
+    for (Driver& d : m_.drivers) driver(d);
+    for (Load& l : m_.loads) load(l);
+    for (Sensor& s : m_.sensors) sensor(s);
+    if (!p_.empty()) throw InvalidModel(p_);
+    mount_sensor_masses();
+  }
+
+ private:
+  void error(const std::string& element, const std::string& msg) { p_.push_back({element, msg}); }
+  bool valid_body(int b) const { return b == kGround || (b >= 0 && b < int(m_.bodies.size())); }
+  bool rotates(int b) const { return b == kGround || m_.bodies[b].rotates(); }
+  std::string body_name(int b) const { return b == kGround ? "ground" : m_.bodies[b].name; }
+
+  void names() {
+    // Names are unique within a kind (a driver names its joint by name) and never a reserved
+    // prefix; channel names across kinds are checked once the model is laid out (finalize).
+    const std::set<std::string> reserved{"ground", "energy", "constraint", "time"};
+    auto check = [&](const std::string& kind, const auto& list) {
+      std::set<std::string> seen;
+      for (const auto& x : list) {
+        const std::string& n = x.name;
+        const std::string el = kind + " '" + n + "'";
+        if (n.empty()) error(el, "a name must not be empty");
+        for (char c : n)
+          if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_')) {
+            error(el, "a name must be letters, digits and '_' (it names CSV columns), got '" +
+                          n + "'");
+            break;
+          }
+        if (reserved.count(n)) error(el, "the name '" + n + "' is reserved");
+        if (!seen.insert(n).second) error(el, "a second " + kind + " named '" + n + "'");
+      }
+    };
+    check("body", m_.bodies);
+    check("joint", m_.joints);
+    check("driver", m_.drivers);
+    check("load", m_.loads);
+    check("sensor", m_.sensors);
+  }
+
+  void body(const Body& b) {
+    const std::string el = "body '" + b.name + "'";
+    if (!(b.mass > 0 && std::isfinite(b.mass))) error(el, "mass must be > 0 kg");
+    if (b.rotates() && !(b.inertia > 0 && std::isfinite(b.inertia)))
+      error(el, "inertia must be > 0 kg·m² (leave it out for a point mass)");
+    if (!b.rotates()) {
+      if (b.phi0 != 0.0 || b.omega0 != 0.0)
+        error(el, "a point mass has no angle: remove 'angle'/'angular_velocity' or give "
+                  "'inertia'");
+      for (const Marker& mk : b.markers)
+        if (mk.s_P_B.squaredNorm() != 0.0)
+          error(el, "marker '" + mk.name + "' is off the point mass (a point mass has no "
+                    "extent: its markers must be at [0, 0]); give 'inertia' for a rigid body");
+    }
+  }
+
+  void joint(Joint& j) {
+    const std::string el = "joint '" + j.name + "'";
+    if (!valid_body(j.a.body) || !valid_body(j.b.body)) return error(el, "body out of range");
+    if (j.a.body == j.b.body) error(el, "joins body '" + body_name(j.a.body) + "' to itself");
+    if (j.clearance) {
+      Clearance& c = *j.clearance;
+      if (j.type != JointType::revolute) error(el, "only a revolute joint can have clearance");
+      if (!(c.clearance > 0)) error(el, "clearance must be > 0 m");
+      if (!(c.journal_radius > 0)) error(el, "journal_radius must be > 0 m");
+      c.bearing_radius = c.journal_radius + c.clearance;
+      if (c.contact.stiffness == 0.0 && c.journal_material && c.bearing_material)
+        c.contact.stiffness = hertz_cylinder_stiffness(
+            c.bearing_radius, c.journal_radius, c.bearing_material->youngs_modulus,
+            c.bearing_material->poisson_ratio, c.journal_material->youngs_modulus,
+            c.journal_material->poisson_ratio);
+      if (!(c.contact.stiffness > 0))
+        error(el, "contact stiffness must be > 0: give 'stiffness' or the two materials");
+      return;
+    }
+    switch (j.type) {
+      case JointType::revolute: break;
+      case JointType::translational:
+        if (!rotates(j.a.body))
+          error(el, "the guide (first body) is a point mass, which has no axes to slide along");
+        if (std::abs(j.axis.norm() - 1.0) > 1e-12) error(el, "axis must be a unit vector");
+        break;
+      case JointType::fixed:
+        if (!rotates(j.a.body) || !rotates(j.b.body))
+          error(el, "a fixed joint needs two rotating bodies (use a revolute joint to pin a "
+                    "point mass)");
+        break;
+      case JointType::distance:
+        if (std::isnan(j.length))
+          j.length = (initial_point(m_, j.b) - initial_point(m_, j.a)).norm();
+        if (!(j.length > 0)) error(el, "length must be > 0 m (the points coincide initially)");
+        break;
+    }
+  }
+
+  void driver(Driver& d) {
+    const std::string el = "driver '" + d.name + "'";
+    if (d.target == DriverTarget::body) {
+      if (d.body < 0 || d.body >= int(m_.bodies.size())) return error(el, "body out of range");
+      const Body& b = m_.bodies[d.body];
+      if (d.coordinate == BodyCoordinate::phi && !b.rotates())
+        return error(el, "body '" + b.name + "' is a point mass: it has no angle to drive");
+      if (std::isnan(d.initial))
+        d.initial = d.coordinate == BodyCoordinate::x   ? b.r0.x()
+                    : d.coordinate == BodyCoordinate::y ? b.r0.y()
+                                                        : b.phi0;
+    } else {
+      if (d.joint < 0 || d.joint >= int(m_.joints.size())) return error(el, "joint out of range");
+      const Joint& j = m_.joints[d.joint];
+      if (j.clearance || (j.type != JointType::revolute && j.type != JointType::translational))
+        return error(el, "joint '" + j.name + "' is " +
+                             (j.clearance ? std::string("a clearance joint")
+                                          : "not revolute or translational") +
+                             "; drive an ideal revolute or translational joint, or drive the "
+                             "body itself (body: NAME, coordinate: phi)");
+      if (j.type == JointType::revolute && (!rotates(j.a.body) || !rotates(j.b.body)))
+        return error(el, "joint '" + j.name + "' holds a point mass, which has no angle to drive");
+      if (std::isnan(d.initial)) {
+        if (j.type == JointType::revolute) {
+          d.initial = initial_angle(m_, j.a.body) - initial_angle(m_, j.b.body);
+        } else {
+          const Vec2 axis = rotation(initial_angle(m_, j.a.body)) * j.axis;
+          d.initial = (initial_point(m_, j.b) - initial_point(m_, j.a)).dot(axis);
+        }
+      }
+    }
+    if (d.profile != DriverProfile::constant_speed && d.expression.empty())
+      error(el, "an expression is required for a position or speed profile");
+  }
+
+  void load(Load& l) {
+    const std::string el = "load '" + l.name + "'";
+    switch (l.type) {
+      case LoadType::force:
+        if (!valid_body(l.a.body)) error(el, "body out of range");
+        break;
+      case LoadType::torque:
+        if (!valid_body(l.body_a)) return error(el, "body out of range");
+        if (!rotates(l.body_a))
+          error(el, "body '" + body_name(l.body_a) + "' is a point mass: it takes no torque");
+        break;
+      case LoadType::spring_damper:
+        if (!valid_body(l.a.body) || !valid_body(l.b.body)) return error(el, "body out of range");
+        if (std::isnan(l.free_length))
+          l.free_length = (initial_point(m_, l.b) - initial_point(m_, l.a)).norm();
+        if (!(l.free_length >= 0)) error(el, "free_length must be >= 0 m");
+        break;
+      case LoadType::torsional_spring_damper:
+        if (!valid_body(l.body_a) || !valid_body(l.body_b)) return error(el, "body out of range");
+        if (!rotates(l.body_a) || !rotates(l.body_b))
+          error(el, "a torsional spring needs two rotating bodies (a point mass has no angle)");
+        if (std::isnan(l.angle0))
+          l.angle0 = initial_angle(m_, l.body_b) - initial_angle(m_, l.body_a);
+        break;
+      case LoadType::bushing: {
+        if (!valid_body(l.a.body) || !valid_body(l.b.body)) return error(el, "body out of range");
+        l.body_a = l.a.body;
+        l.body_b = l.b.body;
+        if (l.frame_body != kGround && l.frame_body != l.a.body && l.frame_body != l.b.body)
+          error(el, "frame must be one of the two bodies it joins, or ground");
+        else if (!rotates(l.frame_body))
+          error(el, "frame '" + body_name(l.frame_body) + "' is a point mass, which has no axes");
+        if ((l.stiffness != 0.0 || l.damping != 0.0) && (!rotates(l.a.body) || !rotates(l.b.body)))
+          error(el, "a torsional part needs two rotating bodies (a point mass has no angle)");
+        if (std::isnan(l.angle0))
+          l.angle0 = initial_angle(m_, l.body_b) - initial_angle(m_, l.body_a);
+        break;
+      }
+    }
+    if (l.stiffness < 0 || l.damping < 0 || (l.stiffness_xy.array() < 0).any() ||
+        (l.damping_xy.array() < 0).any())
+      error(el, "stiffness and damping must be >= 0");
+  }
+
+  void sensor(Sensor& s) {
+    const std::string el = "sensor '" + s.name + "'";
+    if (s.at.body == kGround) error(el, "a sensor must be on a body, not the ground");
+    else if (!valid_body(s.at.body)) error(el, "body out of range");
+    const double n = s.axis.norm();
+    if (!(n > 0) || !std::isfinite(n)) error(el, "axis must be a non-zero vector");
+    else s.axis /= n;
+    if (s.mass < 0 || !std::isfinite(s.mass)) error(el, "mass must be >= 0 kg");
+  }
+
+  void mount_sensor_masses() {
+    for (const Sensor& s : m_.sensors) {
+      if (s.mass <= 0) continue;
+      Body pm;
+      pm.name = s.name + "_mass";
+      pm.type = BodyType::point_mass;
+      pm.mass = s.mass;
+      pm.r0 = initial_point(m_, s.at);
+      pm.v0 = m_.bodies[s.at.body].v0 +
+              m_.bodies[s.at.body].omega0 * perp(rotation(m_.bodies[s.at.body].phi0) * s.at.s);
+      m_.bodies.push_back(pm);
+      Joint mount;
+      mount.name = s.name + "_mount";
+      mount.type = JointType::revolute;
+      mount.a = {static_cast<int>(m_.bodies.size()) - 1, Vec2::Zero(), pm.name};
+      mount.b = s.at;
+      m_.joints.push_back(mount);
+    }
+  }
+
+  Model& m_;
+  std::vector<ModelProblem> p_;
+};
+
+}  // namespace
+
+InvalidModel::InvalidModel(std::vector<ModelProblem> problems)
+    : std::invalid_argument(join_problems(problems)), problems_(std::move(problems)) {}
+
+void finalize(Model& model) {
+  if (model.finalized) return;
+  Checker(model).run();
+  model.finalized = true;
+  // Two elements of different kinds may share a name, but not a channel.
+  std::map<std::string, int> seen;
+  std::vector<ModelProblem> clashes;
+  for (const auto& c : channel_info(model, Workspace(model)))
+    if (++seen[c.name] == 2)
+      clashes.push_back({"model", "two elements write the channel '" + c.name +
+                                      "'; rename one of them"});
+  if (!clashes.empty()) {
+    model.finalized = false;
+    throw InvalidModel(clashes);
+  }
+}
+
+}  // namespace lash

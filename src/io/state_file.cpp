@@ -1,0 +1,97 @@
+#include "io/state_file.hpp"
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <stdexcept>
+
+namespace lash {
+
+namespace {
+constexpr const char* kFormat = "lash-state-1";
+}
+
+void write_state(const std::string& path, const Model& model, const Workspace& ws,
+                 const State& state) {
+  using nlohmann::json;
+  json j;
+  j["format"] = kFormat;
+  j["model"] = model.name;
+  j["t"] = state.t;
+  j["step"] = state.step;
+  j["names"] = state_names(model, ws);
+  j["y"] = std::vector<double>(state.y.data(), state.y.data() + state.y.size());
+  json modes = json::object();
+  for (int k = 0; k < ws.nc; ++k)
+    modes[model.joints[ws.clearance_joints[k]].name] = state.modes[k].in_contact ? 1 : 0;
+  j["modes"] = modes;
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream out(tmp);
+    out << j.dump(1) << "\n";
+    out.flush();
+    if (!out) throw std::runtime_error("cannot write '" + tmp + "'");
+  }
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) throw std::runtime_error("cannot write '" + path + "': " + ec.message());
+}
+
+State read_state(const std::string& path, const Model& model, const Workspace& ws) {
+  using nlohmann::json;
+  auto fail = [&](const std::string& what) {
+    return std::runtime_error(path + ": " + what);
+  };
+  std::ifstream in(path);
+  if (!in) throw fail("cannot open the state file");
+  json j;
+  try {
+    j = json::parse(in);
+  } catch (const json::exception& e) {
+    throw fail(std::string("not a valid state file (JSON): ") + e.what());
+  }
+  if (!j.is_object() || j.value("format", "") != kFormat)
+    throw fail(std::string("not a Lash state file (expected \"format\": \"") + kFormat + "\")");
+  State st;
+  try {
+    st.t = j.at("t").get<double>();
+    st.step = j.value("step", 0.0);
+    const auto names = j.at("names").get<std::vector<std::string>>();
+    const auto y = j.at("y").get<std::vector<double>>();
+    const auto expected = state_names(model, ws);
+    if (names.size() != y.size()) throw fail("'names' and 'y' differ in length");
+    if (names != expected) {
+      std::string diff;
+      for (size_t i = 0; i < std::max(names.size(), expected.size()) && diff.empty(); ++i) {
+        const std::string a = i < names.size() ? names[i] : "(nothing)";
+        const std::string b = i < expected.size() ? expected[i] : "(nothing)";
+        if (a != b)
+          diff = "entry " + std::to_string(i) + " is '" + a + "' in the state but '" + b +
+                 "' in the model";
+      }
+      throw fail("the state does not match the model: " + diff + " (" +
+                 std::to_string(names.size()) + " entries in the state, " +
+                 std::to_string(expected.size()) + " in the model)");
+    }
+    st.y = Eigen::Map<const Eigen::VectorXd>(y.data(), static_cast<Eigen::Index>(y.size()));
+    const json& modes = j.at("modes");
+    for (int k = 0; k < ws.nc; ++k) {
+      const std::string& name = model.joints[ws.clearance_joints[k]].name;
+      if (!modes.contains(name))
+        throw fail("the state has no contact mode for clearance joint '" + name +
+                   "' (was it a clearance joint in the run that wrote it?)");
+      st.modes.push_back({modes.at(name).get<int>() != 0});
+    }
+    if (static_cast<int>(modes.size()) != ws.nc)
+      throw fail("the state has " + std::to_string(modes.size()) +
+                 " contact modes but the model has " + std::to_string(ws.nc) +
+                 " clearance joints");
+  } catch (const json::exception& e) {
+    throw fail(std::string("a value is missing or has the wrong type: ") + e.what());
+  }
+  if (const std::string bad = state_mismatch(ws, st); !bad.empty()) throw fail(bad);
+  return st;
+}
+
+}  // namespace lash
