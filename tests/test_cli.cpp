@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -193,4 +194,64 @@ TEST(Cli, ReportAndAnalyzeAnEarlierRun) {
   EXPECT_EQ(html.find("__LASH_REPORT_DATA__"), std::string::npos);
   EXPECT_NE(html.find("\"flores_slider_crank\""), std::string::npos);
   fs::remove_all(dir);
+}
+
+TEST(Cli, TuneAbsorberPrintsTheDesignTheFormulasAndASnippet) {
+  // f_p = 25 Hz, μ = 0.25, M = 2 kg: m_a = 0.5 kg, f_a = 20 Hz, k_a = 800π² = 7895.68 N/m,
+  // c_a = 50π sqrt(0.048) = 34.4144 N·s/m, ζ_opt = sqrt(0.048) = 0.219089, peak 3.
+  Result r = run_lash("tune-absorber --frequency 25 --mass-ratio 0.25 --primary-mass 2.0");
+  EXPECT_EQ(r.code, 0) << r.out;
+  for (const char* text :
+       {"absorber_mass        0.5 kg", "stiffness            7895.68 N/m",
+        "damping              34.4144 N·s/m", "tuned_frequency      20 Hz",
+        "damping_ratio        0.219089", "peak_amplification   3 ",
+        "f_opt = ω_a / ω_p = 1 / (1 + μ) = 0.8", "sqrt(3μ / (8 (1 + μ)³))", "sqrt(1 + 2/μ) = 3",
+        "Den Hartog, Mechanical Vibrations", "type: bushing", "from: link.P", "to: absorber",
+        "frame: link", "stiffness: [7895.68, 7895.68]", "damping: [34.4144, 34.4144]",
+        "mass: 0.5", "same values for a two-axis absorber"})
+    EXPECT_NE(r.out.find(text), std::string::npos) << text << "\n" << r.out;
+
+  // --absorber-mass instead of --primary-mass; --attach names the link in the snippet; --json.
+  r = run_lash("tune-absorber --frequency 25 --mass-ratio 0.25 --absorber-mass 0.5 "
+               "--attach rod.B --json");
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_DOUBLE_EQ(j["primary_mass"].get<double>(), 2.0);
+  EXPECT_NEAR(j["stiffness"].get<double>(), 800 * M_PI * M_PI, 1e-9);
+  EXPECT_NEAR(j["damping"].get<double>(), 50 * M_PI * std::sqrt(0.048), 1e-12);
+  EXPECT_NEAR(j["tuned_frequency"].get<double>(), 20.0, 1e-12);
+  EXPECT_NEAR(j["peak_amplification"].get<double>(), 3.0, 1e-14);
+  EXPECT_GE(j["formulas"].size(), 5u);
+  EXPECT_NE(j["citation"].get<std::string>().find("Den Hartog"), std::string::npos);
+  const std::string yaml = j["yaml"].get<std::string>();
+  EXPECT_NE(yaml.find("from: rod.B"), std::string::npos) << yaml;
+  EXPECT_NE(yaml.find("frame: rod"), std::string::npos) << yaml;
+}
+
+TEST(Cli, TuneAbsorberRejectsBadInputWithExitTwo) {
+  struct Case {
+    const char* args;
+    const char* message;
+  };
+  const Case cases[] = {
+      {"--frequency 25 --mass-ratio=-0.05 --primary-mass 2",
+       "--mass-ratio: expected a finite number > 0, got -0.05"},
+      {"--frequency 0 --mass-ratio 0.05 --primary-mass 2",
+       "--frequency: expected a finite number > 0, got 0"},
+      {"--frequency 25 --mass-ratio 0.05 --absorber-mass=-1",
+       "--absorber-mass: expected a finite number > 0, got -1"},
+      {"--frequency 25 --mass-ratio 0.05 --primary-mass 2 --absorber-mass 0.1",
+       "expected exactly one of --primary-mass or --absorber-mass, got both"},
+      {"--frequency 25 --mass-ratio 0.05",
+       "expected exactly one of --primary-mass or --absorber-mass, got neither"},
+      {"--frequency 25 --mass-ratio 0.05 --primary-mass 2 --attach ground.O",
+       "--attach: expected a point on the vibrating link, got 'ground.O'"},
+      {"--mass-ratio 0.05 --primary-mass 2", "--frequency is required"},
+      {"--frequency 25 --mass-ratio abc --primary-mass 2", "--mass-ratio"},
+  };
+  for (const Case& c : cases) {
+    const Result r = run_lash(std::string("tune-absorber ") + c.args);
+    EXPECT_EQ(r.code, 2) << c.args << "\n" << r.out;
+    EXPECT_NE(r.out.find(c.message), std::string::npos) << c.args << "\n" << r.out;
+  }
 }

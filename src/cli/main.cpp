@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <iostream>
 
+#include "cli/tune_absorber.hpp"
 #include "io/model_loader.hpp"
 #include "io/report.hpp"
 #include "io/results_writer.hpp"
@@ -129,11 +130,14 @@ int main(int argc, char** argv) {
   check->add_option("--set", overrides, "Override a model value, KEY.PATH=VALUE, repeatable")
       ->take_all();
 
+  const lash::cli::TuneAbsorberCommand tune_absorber(app);
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 2;
   }
+  if (tune_absorber.parsed()) return tune_absorber.run(std::cout, std::cerr);
 
   if (*report || *analyze) {
     model_path = run_dir + "/model_resolved.yaml";

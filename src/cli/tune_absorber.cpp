@@ -1,0 +1,174 @@
+// `lash tune-absorber`: proposes the stiffness and damping of a tuned-mass absorber by Den Hartog's
+// rules (analysis/absorber.hpp), prints them with the formulas and a model-file snippet.
+#include "cli/tune_absorber.hpp"
+
+#include <fmt/format.h>
+
+#include <cctype>
+#include <cmath>
+#include <nlohmann/json.hpp>
+#include <ostream>
+#include <stdexcept>
+
+#include "analysis/absorber.hpp"
+
+namespace lash::cli {
+
+namespace {
+
+/// Throws std::invalid_argument naming the option unless v is finite and > 0.
+void require_positive(const char* option, double v) {
+  if (!(std::isfinite(v) && v > 0))
+    throw std::invalid_argument(fmt::format("{}: expected a finite number > 0, got {}", option, v));
+}
+
+/// Throws unless `point` is a point reference on a moving body: BODY or BODY.MARKER.
+void require_point(const std::string& point) {
+  const std::string body = point.substr(0, point.find('.'));
+  bool ok = !body.empty() && !std::isdigit(static_cast<unsigned char>(body[0]));
+  for (char ch : body) ok = ok && (std::isalnum(static_cast<unsigned char>(ch)) || ch == '_');
+  if (body.size() < point.size()) {
+    const std::string marker = point.substr(body.size() + 1);
+    ok = ok && !marker.empty() && marker.find_first_of(" \t:#,[]{}\"'") == std::string::npos;
+  }
+  if (!ok)
+    throw std::invalid_argument(fmt::format(
+        "--attach: expected BODY or BODY.MARKER (body: letters, digits, _), got '{}'", point));
+  if (body == "ground")
+    throw std::invalid_argument(fmt::format(
+        "--attach: expected a point on the vibrating link, got '{}' (on the ground an absorber "
+        "does nothing)",
+        point));
+}
+
+/// One snippet line: `text` padded so that the comments line up, then `# comment`.
+std::string yaml_line(const std::string& text, const std::string& comment) {
+  return fmt::format("{:<33} # {}\n", text, comment);
+}
+
+/// The absorber as model-file YAML: a point-mass body and a two-axis bushing to the link.
+std::string yaml_snippet(const AbsorberDesign& d, const std::string& attach) {
+  const std::string link = attach.substr(0, attach.find('.'));
+  return fmt::format(
+             "# Tuned-mass absorber: Den Hartog tuning for a {:.6g} Hz mode, mass ratio {:.6g}\n"
+             "# (lash tune-absorber). Merge into the model's bodies: and loads: maps.\n"
+             "# Both axes of the bushing get the same values for a two-axis absorber: it is\n"
+             "# isotropic, absorbs motion in any direction of the plane, and its frame does not\n"
+             "# change its force.\n",
+             d.primary_frequency_hz, d.mass_ratio) +
+         "bodies:\n  absorber:\n" +
+         yaml_line(fmt::format("    mass: {:.6g}", d.absorber_mass), "m_a, kg") +
+         yaml_line("    inertia: 1.0e-6",
+                   "kg·m², must be > 0; the bushing acts at the centre of mass, so any value") +
+         yaml_line("    position: [0, 0]",
+                   "set to the world position of " + attach + " at the initial pose") +
+         "loads:\n  absorber_mount:\n    type: bushing\n" +
+         yaml_line("    from: " + attach, "where the absorber sits on the link") +
+         "    to: absorber\n" + yaml_line("    frame: " + link, "axes of stiffness and damping") +
+         yaml_line(fmt::format("    stiffness: [{:.6g}, {:.6g}]", d.stiffness, d.stiffness),
+                   "k_a, N/m (x, y)") +
+         yaml_line(fmt::format("    damping: [{:.6g}, {:.6g}]", d.damping, d.damping),
+                   "c_a, N·s/m (x, y)");
+}
+
+}  // namespace
+
+TuneAbsorberCommand::TuneAbsorberCommand(CLI::App& app) {
+  sub_ = app.add_subcommand(
+      "tune-absorber",
+      "Propose a tuned-mass absorber (stiffness, damping) for one vibration mode of a link by Den "
+      "Hartog's rules; prints the formulas used and a model-file snippet");
+  sub_->add_option("--frequency", frequency_hz_,
+                   "Natural frequency f_p of the mode to absorb, Hz (> 0)")
+      ->required();
+  sub_->add_option("--mass-ratio", mass_ratio_,
+                   "Mass ratio mu = m_a / M (> 0; typically 0.01 to 0.25)")
+      ->required();
+  primary_mass_option_ = sub_->add_option("--primary-mass", primary_mass_,
+                                          "Primary mass M, kg: the modal mass of the mode at the "
+                                          "attachment point (or --absorber-mass)");
+  absorber_mass_option_ = sub_->add_option("--absorber-mass", absorber_mass_,
+                                           "Absorber mass m_a, kg (or --primary-mass)");
+  sub_->add_option("--attach", attach_,
+                   "Where the absorber sits, BODY.MARKER or BODY, for the YAML snippet "
+                   "(default link.P)");
+  sub_->add_flag("--json", json_, "Print one JSON object instead of text");
+}
+
+int TuneAbsorberCommand::run(std::ostream& out, std::ostream& err) const {
+  AbsorberDesign d;
+  try {
+    // Check the options by their names, then leave the rules to the library.
+    require_positive("--frequency", frequency_hz_);
+    require_positive("--mass-ratio", mass_ratio_);
+    const bool has_m = primary_mass_option_->count() > 0,
+               has_ma = absorber_mass_option_->count() > 0;
+    if (has_m == has_ma)
+      throw std::invalid_argument(
+          std::string("expected exactly one of --primary-mass or --absorber-mass, got ") +
+          (has_m ? "both" : "neither"));
+    if (has_m) require_positive("--primary-mass", primary_mass_);
+    if (has_ma) require_positive("--absorber-mass", absorber_mass_);
+    require_point(attach_);
+
+    AbsorberInput in;
+    in.primary_frequency_hz = frequency_hz_;
+    in.mass_ratio = mass_ratio_;
+    if (has_m) in.primary_mass = primary_mass_;
+    if (has_ma) in.absorber_mass = absorber_mass_;
+    d = den_hartog_absorber(in);
+  } catch (const std::invalid_argument& e) {
+    err << "lash tune-absorber: " << e.what() << "\n";
+    return 2;
+  }
+  const std::string yaml = yaml_snippet(d, attach_);
+
+  if (json_) {
+    nlohmann::ordered_json j;
+    j["method"] = "den_hartog";
+    j["citation"] = kDenHartogCitation;
+    j["frequency"] = d.primary_frequency_hz;
+    j["mass_ratio"] = d.mass_ratio;
+    j["primary_mass"] = d.primary_mass;
+    j["absorber_mass"] = d.absorber_mass;
+    j["stiffness"] = d.stiffness;
+    j["damping"] = d.damping;
+    j["tuned_frequency"] = d.absorber_frequency_hz;
+    j["frequency_ratio"] = d.frequency_ratio;
+    j["damping_ratio"] = d.damping_ratio;
+    j["absorber_damping_ratio"] = d.absorber_damping_ratio;
+    j["peak_amplification"] = d.peak_amplification;
+    j["primary_stiffness"] = d.primary_stiffness;
+    j["formulas"] = d.formulas;
+    j["yaml"] = yaml;
+    out << j.dump(2) << "\n";
+    return 0;
+  }
+
+  out << fmt::format(
+      "Tuned-mass absorber for a {:.6g} Hz mode, mass ratio {:.6g} (Den Hartog's equal peaks)\n\n",
+      d.primary_frequency_hz, d.mass_ratio);
+  out << fmt::format("  absorber_mass        {:.6g} kg\n", d.absorber_mass);
+  out << fmt::format("  stiffness            {:.6g} N/m\n", d.stiffness);
+  out << fmt::format("  damping              {:.6g} N·s/m\n", d.damping);
+  out << fmt::format("  tuned_frequency      {:.6g} Hz\n", d.absorber_frequency_hz);
+  out << fmt::format(
+      "  damping_ratio        {:.6g}  (c_a / (2 m_a ω_p), Den Hartog's; {:.6g} "
+      "referred to the absorber's own ω_a)\n",
+      d.damping_ratio, d.absorber_damping_ratio);
+  out << fmt::format("  peak_amplification   {:.6g}  (|X| / x_st of the primary at both peaks)\n",
+                     d.peak_amplification);
+  out << fmt::format("  primary_mass         {:.6g} kg\n\n", d.primary_mass);
+  out << "Formulas: undamped primary M on a spring K, force F0 sin ωt, absorber m_a on k_a and "
+         "c_a;\n"
+      << kDenHartogCitation << ":\n";
+  for (const auto& line : d.formulas) out << "  " << line << "\n";
+  out << "The peak amplification is the height of the two points every damping passes through;\n"
+         "the true maxima are slightly higher (0.1 % at μ = 0.05, 0.4 % at μ = 0.25). M is the\n"
+         "modal mass of the mode at the attachment point, f_p its frequency without the "
+         "absorber.\n\n";
+  out << "YAML for the model file:\n\n" << yaml;
+  return 0;
+}
+
+}  // namespace lash::cli
