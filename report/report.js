@@ -17,12 +17,6 @@
   const TICKS = {stroke: 'rgba(0,0,0,0.25)', width: 1, size: 4};
   const AXIS_FONT = '11px system-ui, "DejaVu Sans", sans-serif';
   const LABEL_FONT = '600 11.5px system-ui, "DejaVu Sans", sans-serif';
-  const QUANTITY_UNIT = {
-    x: 'm', y: 'm', phi: 'rad', vx: 'm/s', vy: 'm/s', omega: 'rad/s', ax: 'm/s²', ay: 'm/s²',
-    alpha: 'rad/s²', Fx: 'N', Fy: 'N', F: 'N', Fn: 'N', Ft: 'N', ex: 'm', ey: 'm', e: 'm',
-    delta: 'm', delta_dot: 'm/s', vt: 'm/s', mode: '', torque: 'N·m', force: 'N', power: 'W',
-    kinetic: 'J', potential: 'J', dissipated: 'J', input: 'J', balance: 'J', violation: '',
-  };
   const BODY_QUANTITIES = new Set(['x', 'y', 'phi', 'vx', 'vy', 'omega', 'ax', 'ay', 'alpha']);
   const PREFIXABLE = new Set(['m', 'N', 'N·m', 'J', 'W', 's', 'Hz']);
   const SI_PREFIX = {'-9': 'n', '-6': 'µ', '-3': 'm', '0': '', '3': 'k', '6': 'M', '9': 'G'};
@@ -98,10 +92,18 @@
     const k = name.lastIndexOf('.');
     return k < 0 ? ['', name] : [name.slice(0, k), name.slice(k + 1)];
   };
+  /** The channel_info entry of a channel (own keys only: a channel may be called 'constructor'). */
+  const infoOf = (channel) => (Object.prototype.hasOwnProperty.call(channelInfo, channel) ? channelInfo[channel] : null);
+  /** SI unit of a channel as the data gives it (channel_info, written by the engine); '' when the
+   *  data does not say. Never guessed from the name. */
   function unitOf(channel) {
-    const [el0, q] = splitChannel(channel);
-    if (el0 === 'energy') return 'J';
-    return QUANTITY_UNIT[q] !== undefined ? QUANTITY_UNIT[q] : '';
+    const info = infoOf(channel);
+    return info && typeof info.unit === 'string' ? info.unit : '';
+  }
+  /** Short description of a channel from channel_info; the channel's name when the data has none. */
+  function descriptionOf(channel) {
+    const info = infoOf(channel);
+    return info && typeof info.description === 'string' && info.description ? info.description : channel;
   }
   const unitText = (u) => (u ? u : '–');
 
@@ -124,6 +126,9 @@
   const channels = series.channels || {};
   const ideal = series.ideal || {};
   const analysis = D.analysis || {};
+  // Unit and description of every channel (docs/report-data.md); an older file has none.
+  const hasChannelInfo = D.channel_info !== null && typeof D.channel_info === 'object' && !Array.isArray(D.channel_info);
+  const channelInfo = hasChannelInfo ? D.channel_info : {};
   const joints = Array.isArray(model.joints) ? model.joints : [];
   const bodies = Array.isArray(model.bodies) ? model.bodies : [];
   const drivers = Array.isArray(model.drivers) ? model.drivers : [];
@@ -776,7 +781,8 @@
     s.append(el('p', {class: 'legend-note', text:
       'Drag to zoom, double-click to reset; click a legend entry to hide it. ' +
       (hasIdeal ? 'Dark dashed lines: the ideal twin (all joints ideal) on the same time base. ' : '') +
-      'Values are decimated for display; full data in timeseries.csv.'}));
+      'Values are decimated for display; full data in timeseries.csv.' +
+      (hasChannelInfo ? '' : ' This report carries no channel units (no channel_info in its data): units show as –.')}));
 
     const groups = {};
     Object.keys(channels).forEach((n) => { const g = groupOf(n); (groups[g] = groups[g] || []).push(n); });
@@ -793,7 +799,8 @@
       const block = chartBlock('', 'ts-' + G.key);
       Object.entries(byElement).forEach(([e, list]) => {
         picker.append(el('span', {class: 'el', text: e}), el('span', {}, list.map((n) =>
-          el('label', {title: n + ' [' + unitText(unitOf(n)) + ']' + (ideal[n] ? ', with ideal twin' : '')},
+          el('label', {title: n + ': ' + descriptionOf(n) + ' [' + unitText(unitOf(n)) + ']' + (ideal[n] ? ', with ideal twin' : ''),
+                       'data-channel': n},
             el('input', {type: 'checkbox', value: n, checked: selected.has(n) ? true : null,
               onchange: (ev) => { if (ev.target.checked) selected.add(n); else selected.delete(n); draw(); }}),
             splitChannel(n)[1]))));
@@ -868,10 +875,10 @@
     const st = analysis.statistics;
     if (isEmptyObj(st)) notComputed(holder);
     else {
-      holder.append(table(['channel', 'unit', 'min', 'max', 'peak', 'rms', 'crest factor', 'window [ms]'],
-        Object.entries(st).map(([n, v]) => [n, unitText(unitOf(n)), fmt(v.min), fmt(v.max), fmt(v.peak), fmt(v.rms),
-          fmt(v.crest, 3), Array.isArray(v.window) ? fmt(v.window[0] * 1e3) + ' – ' + fmt(v.window[1] * 1e3) : '–']),
-        [2, 3, 4, 5, 6, 7]));
+      holder.append(table(['channel', 'description', 'unit', 'min', 'max', 'peak', 'rms', 'crest factor', 'window [ms]'],
+        Object.entries(st).map(([n, v]) => [n, descriptionOf(n), unitText(unitOf(n)), fmt(v.min), fmt(v.max), fmt(v.peak),
+          fmt(v.rms), fmt(v.crest, 3), Array.isArray(v.window) ? fmt(v.window[0] * 1e3) + ' – ' + fmt(v.window[1] * 1e3) : '–']),
+        [3, 4, 5, 6, 7, 8]));
     }
     let holder2 = null;
     const c = section('comparison', 'Comparison with the ideal twin', 'Ideal comparison',

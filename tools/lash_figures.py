@@ -27,6 +27,11 @@ Curves against the crank angle use the time axis instead when there is no crank 
 is too long to read (more than MAX_REVOLUTIONS_ON_ANGLE_AXIS revolutions). The ideal twin is
 drawn dashed grey wherever series.ideal has the channel.
 
+Each channel's unit and description come from report_data.json's channel_info, which the engine
+writes; the display scale (mm, kN, 10³ m/s²) is chosen from that unit. A channel that
+channel_info does not describe is labelled with its name and no unit: units are never guessed
+from channel names.
+
 --only takes family names or file names (without extension). Exit status: 0 when at least one
 figure was written, 1 when the data allowed none, 2 on bad input (no folder, no or invalid
 report_data.json, unknown --format or --only value).
@@ -81,29 +86,6 @@ STYLE = {
     "savefig.bbox": "tight", "savefig.pad_inches": 0.03,
     "svg.fonttype": "path", "svg.hashsalt": "lash",
 }
-
-# Channel suffix -> (description, symbol, SI unit), docs/model-format.md §13.
-QUANTITIES = {
-    "x": ("position", "$x$", "m"), "y": ("position", "$y$", "m"),
-    "phi": ("angle", r"$\varphi$", "rad"),
-    "vx": ("velocity", "$v_x$", "m/s"), "vy": ("velocity", "$v_y$", "m/s"),
-    "omega": ("angular velocity", r"$\omega$", "rad/s"),
-    "ax": ("acceleration", "$a_x$", "m/s²"), "ay": ("acceleration", "$a_y$", "m/s²"),
-    "alpha": ("angular acceleration", r"$\alpha$", "rad/s²"),
-    "Fx": ("reaction force", "$F_x$", "N"), "Fy": ("reaction force", "$F_y$", "N"),
-    "F": ("reaction force", "$F$", "N"),
-    "ex": ("eccentricity", "$e_x$", "m"), "ey": ("eccentricity", "$e_y$", "m"),
-    "e": ("eccentricity", "$e$", "m"),
-    "delta": ("penetration", r"$\delta$", "m"),
-    "delta_dot": ("penetration rate", r"$\dot{\delta}$", "m/s"),
-    "Fn": ("contact force", "$F_N$", "N"), "Ft": ("friction force", "$F_T$", "N"),
-    "vt": ("slip velocity", "$v_T$", "m/s"), "mode": ("contact mode", "", ""),
-    "torque": ("driver torque", r"$\tau$", "N·m"), "force": ("driver force", "$F$", "N"),
-    "kinetic": ("kinetic energy", "$T$", "J"), "potential": ("potential energy", "$V$", "J"),
-    "dissipated": ("dissipated energy", "$W_d$", "J"), "input": ("input work", "$W_{in}$", "J"),
-    "balance": ("energy balance", "$E$", "J"), "violation": ("constraint violation", "", "m"),
-}
-
 
 class InputError(Exception):
     """Bad input: exit status 2 with this message."""
@@ -313,10 +295,23 @@ class Report:
             self.xaxis = XAxis(self.time, as_array(series.get("crank_angle")))
         self.analysis = data.get("analysis") if isinstance(data.get("analysis"), dict) else {}
         self.model = data.get("model") if isinstance(data.get("model"), dict) else {}
+        info = data.get("channel_info")
+        self._info = info if isinstance(info, dict) else {}
         self.full = {}                      # name -> Envelope, filled by read_full_resolution
 
     def channel_names(self):
         return list(self._channels)
+
+    def unit(self, name):
+        """SI unit of a channel from channel_info (written by the engine); '' when the data does
+        not give one. Never guessed from the name."""
+        u = get(self._info, name, "unit")
+        return u if isinstance(u, str) else ""
+
+    def description(self, name):
+        """Short description of a channel from channel_info; the channel name when there is none."""
+        d = get(self._info, name, "description")
+        return d if isinstance(d, str) and d.strip() else name
 
     def channel(self, name):
         """Decimated channel on self.time, or None when absent or of the wrong length."""
@@ -428,25 +423,33 @@ def scaled_unit(unit, peak):
     return 1.0, unit
 
 
-def describe(channel):
-    """(owner, description, symbol, SI unit) of a channel name like 'rod_slider.Fn'."""
-    owner, _, suffix = channel.rpartition(".")
-    desc, symbol, unit = QUANTITIES.get(suffix, (suffix, "", ""))
-    return owner, desc, symbol, unit
-
-
 def pretty(name):
     """'rod_slider' -> 'Rod slider' for axis labels."""
     s = name.replace("_", " ")
     return s[:1].upper() + s[1:]
 
 
-def axis_label(channel, unit_label):
-    """'Slider acceleration $a_x$ (10³ m/s²)' for 'slider.ax' in the given unit."""
-    owner, desc, symbol, _ = describe(channel)
-    text = f"{pretty(owner)} {desc}" if owner and owner != "energy" else pretty(desc)
-    if symbol:
-        text += f" {symbol}"
+def owner_of(channel):
+    """'rod_slider' of 'rod_slider.Fn': the element a channel belongs to ('' when none)."""
+    return channel.rpartition(".")[0]
+
+
+def quantity_text(rep, channel):
+    """What a channel is, for an axis label: its description from the data, preceded by its
+    element ('Slider acceleration ...') unless the description names it already."""
+    desc = rep.description(channel)
+    if desc == channel:                   # no description in the data: the name as it is
+        return channel.replace("$", r"\$")
+    owner = owner_of(channel)
+    named = any(n in desc.lower() for n in (owner.lower(), owner.replace("_", " ").lower()))
+    text = desc if not owner or named else f"{pretty(owner)} {desc}"
+    # A '$' in the data is text, not the start of matplotlib mathtext.
+    return (text[:1].upper() + text[1:]).replace("$", r"\$")
+
+
+def axis_label(rep, channel, unit_label):
+    """'Slider acceleration (10³ m/s²)' for 'slider.ax' described as 'acceleration' in m/s²."""
+    text = quantity_text(rep, channel)
     return f"{text} ({unit_label})" if unit_label else text
 
 
@@ -490,8 +493,7 @@ def draw_vs_motion(rep, ax, channel, ideal=None, legend=True):
     ideal_v = rep.ideal(ideal or channel)
     peak = max(np.nanmax(np.abs(np.concatenate([lo, hi]))) if np.any(np.isfinite(lo)) else 0.0,
                np.nanmax(np.abs(ideal_v)) if ideal_v is not None else 0.0)
-    _, _, _, unit = describe(channel)
-    scale, unit_label = scaled_unit(unit, peak)
+    scale, unit_label = scaled_unit(rep.unit(channel), peak)
     x = rep.xaxis.of_time(t)
     if lo is hi:
         ax.plot(x, lo * scale, color=COLOR_CLEARANCE, linewidth=0.6, zorder=2)
@@ -506,7 +508,7 @@ def draw_vs_motion(rep, ax, channel, ideal=None, legend=True):
     if legend and ideal_v is not None:
         legend_above(ax, ncol=2)
     rep.xaxis.apply(ax)
-    ax.set_ylabel(axis_label(channel, unit_label))
+    ax.set_ylabel(axis_label(rep, channel, unit_label))
     return unit_label
 
 
@@ -747,11 +749,11 @@ def plan_poincare(rep):
 
     def draw():
         fig, (ax,) = new_figure(width=2.8, height=2.8)
-        ox, _, _, ux = describe(var[0])
-        oy, _, _, uy = describe(var[1])
+        ox, oy = owner_of(var[0]), owner_of(var[1])
         x, y = pts[:, 0], pts[:, 1]
         dense = len(pts) > MAX_VECTOR_MARKERS
-        eccentricity = ox == oy and var[0].endswith(".ex") and var[1].endswith(".ey")
+        eccentricity = ox == oy and var[0].endswith(".ex") and var[1].endswith(".ey") \
+            and rep.unit(var[0]) == rep.unit(var[1]) == "m"
         if eccentricity:
             c = rep.clearance_of(ox)
             ax.scatter(x * 1e3, y * 1e3, s=7, color=COLOR_CLEARANCE, linewidths=0, zorder=4,
@@ -759,12 +761,12 @@ def plan_poincare(rep):
             extent = float(np.nanmax(np.hypot(x, y))) * 1e3
             eccentricity_axes(ax, c * 1e3 if c else None, extent)
         else:
-            sx, lx = scaled_unit(ux, float(np.nanmax(np.abs(x))))
-            sy, ly = scaled_unit(uy, float(np.nanmax(np.abs(y))))
+            sx, lx = scaled_unit(rep.unit(var[0]), float(np.nanmax(np.abs(x))))
+            sy, ly = scaled_unit(rep.unit(var[1]), float(np.nanmax(np.abs(y))))
             ax.scatter(x * sx, y * sy, s=7, color=COLOR_CLEARANCE, linewidths=0, zorder=4,
                        rasterized=dense)
-            ax.set_xlabel(axis_label(var[0], lx) if var[0] else "First variable")
-            ax.set_ylabel(axis_label(var[1], ly) if var[1] else "Second variable")
+            ax.set_xlabel(axis_label(rep, var[0], lx) if var[0] else "First variable")
+            ax.set_ylabel(axis_label(rep, var[1], ly) if var[1] else "Second variable")
         return fig
     return [Plan("poincare", "poincare", draw)]
 
@@ -786,11 +788,9 @@ def plan_spectra(rep):
         f_max = max(float(f[-1]) for _, f, _ in spectra)
         scale, label = (1e-3, "Frequency (kHz)") if f_max > 5e3 else (1.0, "Frequency (Hz)")
         for ax, (name, f, a) in zip(axes, spectra):
-            _, _, symbol, unit = describe(name)
             ax.semilogy(f * scale, a, color=COLOR_CLEARANCE, linewidth=0.6)
-            owner = pretty(describe(name)[0])
-            ax.set_ylabel(f"{owner} {symbol or name} amplitude ({unit})" if unit
-                          else f"{name} amplitude")
+            text, unit = quantity_text(rep, name) + " amplitude", rep.unit(name)
+            ax.set_ylabel(f"{text} ({unit})" if unit else text)
             ax.set_xlim(0, f_max * scale)
             # Decades below 1e-7 of the largest line are numerical floor, not signal.
             top = float(np.max(a))
@@ -817,22 +817,22 @@ def plan_phase(rep):
             continue
 
         def draw(cx=cx, cy=cy, x=x, y=y):
-            owner = describe(cx)[0]
-            if cx == owner + ".ex" and cy == owner + ".ey":
+            owner = owner_of(cx)
+            if cx == owner + ".ex" and cy == owner + ".ey" and rep.unit(cx) == rep.unit(cy) == "m":
                 # The journal path: square, in mm, with the clearance circle, like the orbit.
                 fig, (ax,) = new_figure(width=2.8, height=2.8)
                 ax.plot(x * 1e3, y * 1e3, color=COLOR_CLEARANCE, linewidth=0.5, zorder=2)
                 c = rep.clearance_of(owner)
                 eccentricity_axes(ax, c * 1e3 if c else None,
                                   float(np.nanmax(np.hypot(x, y))) * 1e3,
-                                  axis_label(cx, "mm"), axis_label(cy, "mm"))
+                                  axis_label(rep, cx, "mm"), axis_label(rep, cy, "mm"))
                 return fig
             fig, (ax,) = new_figure(width=SINGLE_COLUMN_IN, height=2.6)
-            sx, lx = scaled_unit(describe(cx)[3], float(np.nanmax(np.abs(x))))
-            sy, ly = scaled_unit(describe(cy)[3], float(np.nanmax(np.abs(y))))
+            sx, lx = scaled_unit(rep.unit(cx), float(np.nanmax(np.abs(x))))
+            sy, ly = scaled_unit(rep.unit(cy), float(np.nanmax(np.abs(y))))
             ax.plot(x * sx, y * sy, color=COLOR_CLEARANCE, linewidth=0.5)
-            ax.set_xlabel(axis_label(cx, lx))
-            ax.set_ylabel(axis_label(cy, ly))
+            ax.set_xlabel(axis_label(rep, cx, lx))
+            ax.set_ylabel(axis_label(rep, cy, ly))
             return fig
         plans.append(Plan("phase", f"phase_{safe_name(cx)}_vs_{safe_name(cy)}", draw))
     if not plans:
@@ -906,17 +906,19 @@ def plan_energy(rep):
         scale_t, t_label = time_unit(rep.time)
         t = rep.time * scale_t
         peak = max(float(np.nanmax(np.abs(rep.channel("energy." + k)))) for k in parts)
-        scale, unit = scaled_unit("J", peak)
+        # One axis for all parts: its unit is theirs when the data gives them one and the same.
+        units = {rep.unit("energy." + k) for k in parts}
+        scale, unit = scaled_unit(units.pop() if len(units) == 1 else "", peak)
         for k in parts:
             axes[0].plot(t, rep.channel("energy." + k) * scale, color=ENERGY_COLORS[k],
-                         linewidth=0.8, label=pretty(QUANTITIES[k][0]))
-        axes[0].set_ylabel(f"Energy ({unit})")
+                         linewidth=0.8, label=quantity_text(rep, "energy." + k))
+        axes[0].set_ylabel(f"Energy ({unit})" if unit else "Energy")
         legend_above(axes[0], ncol=2)
         if balance is not None:
             drift = balance - balance[0]
-            s, u = scaled_unit("J", float(np.nanmax(np.abs(drift))) or 1.0)
+            s, u = scaled_unit(rep.unit("energy.balance"), float(np.nanmax(np.abs(drift))) or 1.0)
             axes[1].plot(t, drift * s, color="black", linewidth=0.7)
-            axes[1].set_ylabel(f"Balance drift ({u})")
+            axes[1].set_ylabel(f"Balance drift ({u})" if u else "Balance drift")
             axes[1].yaxis.set_major_locator(MaxNLocator(nbins=3))
         axes[-1].set_xlabel(t_label)
         axes[-1].set_xlim(snap(t[0]), snap(t[-1]))

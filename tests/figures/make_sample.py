@@ -17,6 +17,10 @@ figure tests, this script makes a realistic sample from what `lash run` already 
               acceleration after the first period; phase pairs (e_x, e_y) and (δ, δ̇) per
               clearance joint and (x, vx) per translational body; a *fake* Lyapunov history
               (marked "stand-in").
+* channel_info  unit and description of every channel, copied from summary.json's
+              channels.<name>.unit/.description (written by the engine); a channel summary.json
+              does not describe is left out, as the report page and figures then show it
+              without a unit. Units are never guessed from channel names.
 
 Only the standard library and numpy are needed; the model section uses PyYAML (Debian's
 python3-yaml) on model_resolved.yaml when it is installed and is inferred from the column names
@@ -185,6 +189,19 @@ def translational_bodies(model, col):
         if phi is not None and x is not None and np.ptp(phi) < 1e-9 and np.ptp(x) > 0:
             out.append(b["name"])
     return out
+
+
+def channel_info(summary, names):
+    """{name: {"unit", "description"}} from summary.json's channels, for the named channels that
+    summary.json gives a unit; the others are left out."""
+    described = summary.get("channels") if isinstance(summary.get("channels"), dict) else {}
+    info = {}
+    for name in names:
+        entry = described.get(name)
+        if isinstance(entry, dict) and isinstance(entry.get("unit"), str):
+            info[name] = {"unit": entry["unit"],
+                          "description": str(entry.get("description") or name)}
+    return info
 
 
 def tolist(a):
@@ -369,6 +386,7 @@ def build(run_dir, ideal_dir=None, period=0.012, max_points=MAX_SERIES_POINTS):
                    "crank_angle": tolist(angle[pick]) if angle is not None else None,
                    "channels": channels, "ideal": ideal},
         "frames": frames,
+        "channel_info": channel_info(summary, list(channels) + list(ideal_full)),
         "analysis": {
             "statistics": statistics, "comparison": comparison or None,
             "clearance": clearance or None, "poincare": poincare, "spectra": spectra,

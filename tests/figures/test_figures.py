@@ -11,6 +11,7 @@ summary.json) and its ideal twin, builds report_data.json from them with make_sa
 lash_figures.py on it the way a user does.
 """
 
+import copy
 import importlib.util
 import json
 import math
@@ -23,7 +24,10 @@ import unittest
 import xml.etree.ElementTree as ET
 import zlib
 
+import matplotlib
 import numpy as np
+
+matplotlib.use("Agg")
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
@@ -45,6 +49,29 @@ EXPECTED = ["acceleration_peak", "acceleration_translational", "contact_force_ro
             "phase_rod_slider-ex_vs_rod_slider-ey",
             "phase_rod_slider-delta_vs_rod_slider-delta_dot", "phase_slider-x_vs_slider-vx",
             "lyapunov", "driver_torque_crank", "energy"]
+
+# Unit and description of each channel by quantity, as the engine writes them into summary.json
+# (channels.<name>.unit/.description); only this test uses the table, to play the engine's part.
+ENGINE_UNITS = {
+    "x": ("m", "position of the centre of mass along x"),
+    "y": ("m", "position of the centre of mass along y"),
+    "phi": ("rad", "angle"), "vx": ("m/s", "velocity along x"), "vy": ("m/s", "velocity along y"),
+    "omega": ("rad/s", "angular velocity"), "ax": ("m/s²", "acceleration along x"),
+    "ay": ("m/s²", "acceleration along y"), "alpha": ("rad/s²", "angular acceleration"),
+    "Fx": ("N", "reaction force along x"), "Fy": ("N", "reaction force along y"),
+    "F": ("N", "reaction force magnitude"), "ex": ("m", "eccentricity along x"),
+    "ey": ("m", "eccentricity along y"), "e": ("m", "eccentricity"),
+    "delta": ("m", "penetration"), "delta_dot": ("m/s", "penetration rate"),
+    "Fn": ("N", "normal contact force"), "Ft": ("N", "friction force"),
+    "vt": ("m/s", "slip velocity"), "mode": ("", "contact mode (1 in contact)"),
+    "torque": ("N·m", "driving torque"), "kinetic": ("J", "kinetic energy"),
+    "potential": ("J", "potential energy"), "dissipated": ("J", "dissipated energy"),
+    "input": ("J", "input work"), "balance": ("J", "energy balance"),
+}
+# Sensor channels whose names say nothing of their unit: an accelerometer (no known suffix) and
+# a load cell whose '.x' a suffix table would have read as a position in m.
+SENSORS = {"acc1.a": ("m/s²", "accelerometer acc1 on the slider"),
+           "load_cell.x": ("N", "guide load cell force")}
 
 MODEL_YAML = """name: synthetic_slider_crank
 gravity: [0, -9.81]
@@ -130,6 +157,7 @@ def write_run(folder, clearance):
                      "rod_slider.Fn": fn, "rod_slider.Ft": 0 * t, "rod_slider.vt": d(angle) * e,
                      "rod_slider.mode": mode})
         torque = torque + 5e-3 * fn
+        cols.update({"acc1.a": 1.02 * cols["slider.ax"], "load_cell.x": 300.0 * np.sin(th)})
     else:
         cols.update({"rod_slider.Fx": inertia, "rod_slider.Fy": 0.1 * inertia,
                      "rod_slider.F": np.abs(inertia) * 1.005})
@@ -147,9 +175,29 @@ def write_run(folder, clearance):
             f.write(f"{t0!r},rod_slider,onset,{v!r}\n{t1!r},rod_slider,separation,{-0.8 * v!r}\n")
     with open(os.path.join(folder, "model_resolved.yaml"), "w") as f:
         f.write(MODEL_YAML if clearance else MODEL_YAML.replace(", clearance: 0.5e-3", ""))
+    channels = {}
+    for name, v in cols.items():
+        if name == "time":
+            continue
+        unit, description = SENSORS.get(name) or ENGINE_UNITS[name.rpartition(".")[2]]
+        channels[name] = {"min": float(v.min()), "max": float(v.max()),
+                          "peak": float(np.abs(v).max()), "unit": unit,
+                          "description": description}
     with open(os.path.join(folder, "summary.json"), "w") as f:
         json.dump({"status": {"ok": True, "time": float(t[-1]), "element": "", "message": ""},
+                   "channels": channels,
                    "clearance_joints": {"rod_slider": {"clearance": CLEARANCE}}}, f)
+
+
+def axis_labels(plan):
+    """[(x label, y label)] of each axes of the figure a plan draws, in the figure style."""
+    import matplotlib.pyplot as plt
+    with plt.rc_context(lash_figures.STYLE):
+        fig = plan.draw()
+    try:
+        return [(ax.get_xlabel(), ax.get_ylabel()) for ax in fig.axes]
+    finally:
+        plt.close(fig)
 
 
 def run_figures(*args):
@@ -235,6 +283,50 @@ class FiguresOfASyntheticRun(unittest.TestCase):
         lash_figures.read_full_resolution(rep, ["slider.ax"])
         self.assertEqual(rep.full["slider.ax"].peak, abs(SPIKE_AX))
         self.assertEqual(float(rep.full["slider.ax"].lo.min()), SPIKE_AX)
+
+    def test_units_and_descriptions_come_from_channel_info(self):
+        info = self.report["channel_info"]
+        self.assertEqual(info["acc1.a"], {"unit": "m/s²",
+                                          "description": "accelerometer acc1 on the slider"})
+        self.assertEqual(info["load_cell.x"], {"unit": "N", "description": "guide load cell force"})
+        self.assertEqual(set(info), set(self.report["series"]["channels"]))
+        report = copy.deepcopy(self.report)
+        report["analysis"]["phase"] = [{"x": "acc1.a", "y": "load_cell.x"}]
+        spectrum = next(iter(report["analysis"]["spectra"].values()))
+        report["analysis"]["spectra"] = {"acc1.a": spectrum}
+        rep = lash_figures.Report(self.run_dir, report)
+        # A sensor with no telling suffix gets m/s² (scaled by a power of ten), and the load cell
+        # named '.x' gets N, not the metres a suffix table would have given it.
+        [(x_label, y_label)] = axis_labels(lash_figures.plan_phase(rep)[0])
+        self.assertRegex(x_label, r"^Accelerometer acc1 on the slider \(\$10\^\{3\}\$ m/s²\)$")
+        self.assertEqual(y_label, "Guide load cell force (N)")
+        [(_, y_label)] = axis_labels(lash_figures.plan_spectra(rep)[0])
+        self.assertEqual(y_label, "Accelerometer acc1 on the slider amplitude (m/s²)")
+        [(_, y_label)] = axis_labels(lash_figures.plan_contact_force(rep)[0])
+        self.assertEqual(y_label, "Rod slider normal contact force (kN)")
+        labels = axis_labels(lash_figures.plan_energy(rep)[0])
+        self.assertEqual([y for _, y in labels], ["Energy (J)", "Balance drift (J)"])
+
+    def test_a_channel_channel_info_lacks_gets_its_name_and_no_unit(self):
+        report = copy.deepcopy(self.report)
+        for name in ("load_cell.x", "rod_slider.Fn"):
+            del report["channel_info"][name]
+        report["analysis"]["phase"] = [{"x": "acc1.a", "y": "load_cell.x"}]
+        rep = lash_figures.Report(self.run_dir, report)
+        [(x_label, y_label)] = axis_labels(lash_figures.plan_phase(rep)[0])
+        self.assertIn("m/s²", x_label)
+        self.assertEqual(y_label, "load_cell.x")
+        [(_, y_label)] = axis_labels(lash_figures.plan_contact_force(rep)[0])
+        self.assertEqual(y_label, "rod_slider.Fn")
+        # No channel_info at all (a file from an older engine): every figure is still drawn.
+        del report["channel_info"]
+        rep = lash_figures.Report(self.run_dir, report)
+        [(_, y_label)] = axis_labels(lash_figures.plan_acceleration_peak(rep)[0])
+        self.assertEqual(y_label, "slider.ax")
+        labels = axis_labels(lash_figures.plan_energy(rep)[0])
+        self.assertEqual([y for _, y in labels], ["Energy", "Balance drift"])
+        [(x_label, y_label)] = axis_labels(lash_figures.plan_poincare(rep)[0])
+        self.assertEqual((x_label, y_label), ("rod_slider.ex", "rod_slider.ey"))
 
     def test_only_and_format_select_the_files(self):
         out = tempfile.mkdtemp(dir=self.tmp)

@@ -6,7 +6,11 @@
 // Fails (exit 1, one line per problem) when: the page asks for anything but its own file:// URL;
 // a console error or an uncaught exception occurs; a uPlot chart has no coloured pixel in its plot
 // area; the animation canvas is the same before and after 300 ms of play; a clearance inset is
-// blank; the verdict (or "not computed" when there is none) is missing.
+// blank; the verdict (or "not computed" when there is none) is missing; the data has no
+// channel_info or it lacks a channel the data mentions; a time-series legend entry, a channel
+// picker tooltip or the statistics table shows a unit other than the one channel_info gives
+// (display prefixes such as kN or 10³ m/s² allowed). LASH_REPORT_ALLOW_NO_CHANNEL_INFO=1 accepts
+// data without channel_info (an older engine's) and then requires every unit to show as "–".
 import {createRequire} from 'node:module';
 import {mkdtempSync, rmSync, existsSync} from 'node:fs';
 import {tmpdir} from 'node:os';
@@ -107,6 +111,59 @@ try {
   if (A.lyapunov && A.lyapunov.history && A.lyapunov.history.length) expect.push('lyapunov');
   for (const id of expect) if (!ids.has(id)) fail(`no chart ${id} although the data has it`);
   if (![...ids].some((id) => id.startsWith('ts-'))) fail('no time-series chart');
+
+  // Units and descriptions come from channel_info (docs/report-data.md), never from the names.
+  const info = data.channel_info;
+  const hasInfo = info !== null && typeof info === 'object' && !Array.isArray(info);
+  const S = data.series || {};
+  if (!hasInfo && process.env.LASH_REPORT_ALLOW_NO_CHANNEL_INFO !== '1')
+    fail('the data has no channel_info (the unit and description of every channel, docs/report-data.md)');
+  if (hasInfo) {
+    const mentioned = new Set([
+      ...Object.keys(S.channels || {}), ...Object.keys(S.ideal || {}),
+      ...Object.keys(A.statistics || {}), ...Object.keys(A.comparison || {}), ...Object.keys(A.spectra || {}),
+      ...(Array.isArray(A.phase) ? A.phase.flatMap((p) => (p ? [p.x, p.y] : [])) : []),
+      ...((A.poincare && Array.isArray(A.poincare.variables)) ? A.poincare.variables : [])]);
+    const lacking = [...mentioned].filter((n) => !(Object.hasOwn(info, n) && info[n] &&
+      typeof info[n].unit === 'string' && typeof info[n].description === 'string'));
+    if (lacking.length) fail(`channel_info lacks a unit and description for ${lacking.length} channel(s): ${lacking.slice(0, 6).join(', ')}`);
+  }
+  const unitOf = (n) => (hasInfo && Object.hasOwn(info, n) && info[n] && typeof info[n].unit === 'string' ? info[n].unit : '');
+  const descOf = (n) => (hasInfo && Object.hasOwn(info, n) && info[n] && info[n].description ? String(info[n].description) : n);
+  // A displayed unit: the unit itself, with an SI prefix (kN, mm) or a power of ten (10³ m/s²);
+  // no unit shows as "–" or a bare power of ten.
+  const POW10 = '10[⁻⁰¹²³⁴⁵⁶⁷⁸⁹]+';
+  const showsUnit = (shown, unit) => (unit === ''
+    ? shown === '–' || new RegExp(`^${POW10}$`).test(shown)
+    : shown === unit || (shown.endsWith(' ' + unit) && new RegExp(`^${POW10} `).test(shown)) ||
+      (shown.length === unit.length + 1 && shown.endsWith(unit) && 'nµmkMG'.includes(shown[0])));
+  const legends = await page.evaluate(() => window.lashReport.charts.filter((c) => c.id.startsWith('ts-'))
+    .flatMap((c) => c.u.series.slice(1).map((sr) => sr.label)));
+  let withUnit = 0;
+  for (const label of legends) {
+    const m = /^(.+) \[(.*)\]$/.exec(label || '');
+    if (!m) { if (!/ ideal$/.test(label || '')) fail(`time-series legend entry "${label}" has no [unit]`); continue; }
+    const [, name, shown] = m;
+    if (!showsUnit(shown, unitOf(name))) fail(`legend "${label}": channel_info gives ${name} the unit "${unitOf(name)}"`);
+    if (unitOf(name)) withUnit++;
+  }
+  if (hasInfo && !withUnit) fail('no plotted time-series channel shows a unit from channel_info');
+  const pickers = await page.evaluate(() => Array.from(document.querySelectorAll('label[data-channel]'))
+    .map((l) => [l.dataset.channel, l.title]));
+  if (pickers.length !== Object.keys(S.channels || {}).length)
+    fail(`${pickers.length} channel checkboxes for ${Object.keys(S.channels || {}).length} channels`);
+  for (const [name, title] of pickers) {
+    const want = `${name}: ${descOf(name)} [${unitOf(name) || '–'}]`;
+    if (!title.startsWith(want)) fail(`channel checkbox ${name}: tooltip "${title}", expected "${want}…"`);
+  }
+  const statRows = await page.evaluate(() => Array.from(document.querySelectorAll('#statistics tbody tr'))
+    .map((tr) => Array.from(tr.children).map((td) => td.textContent)));
+  for (const [name, desc, unit] of statRows) {
+    if (unit !== (unitOf(name) || '–') || desc !== descOf(name))
+      fail(`statistics row ${name}: "${desc}" [${unit}], channel_info gives "${descOf(name)}" [${unitOf(name) || '–'}]`);
+  }
+  if (!hasInfo && !(await page.locator('#timeseries').innerText()).includes('no channel_info'))
+    fail('the data has no channel_info, yet the time-series section does not say so');
 
   // Hover over every chart: the cursor and legend code must not throw.
   for (const c of charts) {

@@ -7,6 +7,12 @@ right shape, size and order of magnitude. The C++ `lash report` computes the rea
 
     make_sample_data.py RUN_DIR [--ideal IDEAL_RUN_DIR] [-o report_data.json]
                         [--sparse]            # null/absent analysis, ideal and crank angle
+                        [--no-channel-info]   # no channel_info: a file from an older engine
+
+channel_info (the unit and description of every channel) is copied from summary.json's
+channels.<name>.unit/.description, which the engine writes. The fixture adds two sensor channels
+whose names say nothing of their unit (acc1.a in m/s², load_cell.x in N, which a suffix rule would
+read as metres), so that the page test can tell units taken from the data from guessed ones.
 
 RUN_DIR holds timeseries.csv, events.csv, summary.json and model_resolved.yaml, e.g. from
 `build/lash run examples/flores_slider_crank.yaml -o /tmp/run -q --set solver.end_time=0.12`.
@@ -22,6 +28,31 @@ import sys
 
 MAX_POINTS = 4000   # decimated series length (contract: <= ~4000)
 MAX_FRAMES = 600    # animation frames (contract: <= ~600)
+
+# Sensor channels the fixture adds: name -> (source column, unit, description).
+SENSORS = {"acc1.a": ("slider.ax", "m/s²", "accelerometer acc1 on the slider"),
+           "load_cell.x": ("slider_guide.F", "N", "guide load cell force")}
+
+# Stand-in units for the channels of a summary.json that predates channel units (an engine
+# without them): the fixture plays the engine's part so that the page sees a complete
+# channel_info. Used only where summary.json gives no unit, with a note on stderr; the page and
+# tools/lash_figures.py never guess units from names. Remove once every engine writes them.
+STAND_IN_UNITS = {
+    "x": ("m", "position along x"), "y": ("m", "position along y"), "phi": ("rad", "angle"),
+    "vx": ("m/s", "velocity along x"), "vy": ("m/s", "velocity along y"),
+    "omega": ("rad/s", "angular velocity"), "ax": ("m/s²", "acceleration along x"),
+    "ay": ("m/s²", "acceleration along y"), "alpha": ("rad/s²", "angular acceleration"),
+    "Fx": ("N", "reaction force along x"), "Fy": ("N", "reaction force along y"),
+    "F": ("N", "reaction force magnitude"), "ex": ("m", "eccentricity along x"),
+    "ey": ("m", "eccentricity along y"), "e": ("m", "eccentricity"),
+    "delta": ("m", "penetration"), "delta_dot": ("m/s", "penetration rate"),
+    "Fn": ("N", "normal contact force"), "Ft": ("N", "friction force"),
+    "vt": ("m/s", "slip velocity"), "mode": ("", "contact mode (1 in contact)"),
+    "torque": ("N·m", "driving torque"), "force": ("N", "driving force"),
+    "kinetic": ("J", "kinetic energy"), "potential": ("J", "potential energy"),
+    "dissipated": ("J", "dissipated energy"), "input": ("J", "input work"),
+    "balance": ("J", "energy balance"), "violation": ("", "largest constraint residual"),
+}
 
 
 # --- a small YAML subset reader: block maps, flow maps/lists, scalars, comments ----------------
@@ -328,14 +359,38 @@ def lyapunov_stand_in(t, cols, joint, period, interval):
             "renormalisations": n, "interval": interval, "history": history[::stride]}
 
 
+def channel_info(summary, names):
+    """{name: {"unit", "description"}} for every channel: summary.json's, the sensors', else the
+    stand-ins (noted on stderr)."""
+    described = summary.get("channels") if isinstance(summary.get("channels"), dict) else {}
+    info, stand_ins = {}, []
+    for name in names:
+        entry = described.get(name)
+        if name in SENSORS:
+            unit, description = SENSORS[name][1:]
+        elif isinstance(entry, dict) and isinstance(entry.get("unit"), str):
+            unit, description = entry["unit"], entry.get("description") or name
+        else:
+            unit, description = STAND_IN_UNITS.get(name.rpartition(".")[2], ("", name))
+            stand_ins.append(name)
+        info[name] = {"unit": unit, "description": description}
+    if stand_ins:
+        print(f"make_sample_data: summary.json gives no unit for {len(stand_ins)} channel(s) "
+              f"(an engine without channel units): stand-ins used", file=sys.stderr)
+    return info
+
+
 # --- assembling ------------------------------------------------------------------------------------
-def build(run_dir, ideal_dir, sparse):
+def build(run_dir, ideal_dir, sparse, with_channel_info=True):
     summary = json.load(open(os.path.join(run_dir, "summary.json")))
     yaml_path = os.path.join(run_dir, "model_resolved.yaml")
     yaml_text = open(yaml_path).read() if os.path.exists(yaml_path) else summary["model"]["resolved"]
     model_yaml = load_yaml_subset(yaml_text)
     cols = read_timeseries(os.path.join(run_dir, "timeseries.csv"))
     events = read_events(os.path.join(run_dir, "events.csv"))
+    for name, (source, _, _) in SENSORS.items():
+        if source in cols:
+            cols[name] = [1.02 * v for v in cols[source]]
     t = cols["time"]
     idx = stride_indices(len(t), MAX_POINTS)
     model = build_model(model_yaml, summary)
@@ -371,7 +426,7 @@ def build(run_dir, ideal_dir, sparse):
     end_time = t[-1]
     t_steady = period if period and period < end_time / 2 else 0.0
     stat_names = [n for n in ("slider.ax", "slider.vx", "crank.torque", "crank_pivot.F",
-                              "crank_rod.F", "slider_guide.F", "energy.kinetic")
+                              "crank_rod.F", "slider_guide.F", "energy.kinetic") + tuple(SENSORS)
                   if n in cols]
     for j in clearance_joints:
         stat_names += [j["name"] + s for s in (".Fn", ".e", ".delta_dot")]
@@ -443,6 +498,8 @@ def build(run_dir, ideal_dir, sparse):
         "frames": frames,
         "analysis": analysis,
     }
+    if with_channel_info:
+        data["channel_info"] = channel_info(summary, [n for n in cols if n != "time"])
     if sparse:
         # The shape a report has when nothing optional was computed: every consumer must cope.
         data["series"]["crank_angle"] = None
@@ -461,8 +518,10 @@ def main():
     ap.add_argument("-o", "--output", default="report_data.json")
     ap.add_argument("--sparse", action="store_true",
                     help="leave out every optional section (tests graceful 'not computed')")
+    ap.add_argument("--no-channel-info", action="store_true",
+                    help="leave out channel_info, as a file from an engine without channel units")
     args = ap.parse_args()
-    data = build(args.run_dir, args.ideal, args.sparse)
+    data = build(args.run_dir, args.ideal, args.sparse, not args.no_channel_info)
     with open(args.output, "w") as f:
         json.dump(data, f, separators=(",", ":"), allow_nan=False)
     print(f"wrote {args.output} ({os.path.getsize(args.output) / 1024:.0f} KiB)", file=sys.stderr)
