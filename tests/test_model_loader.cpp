@@ -91,15 +91,19 @@ TEST(ModelLoader, UnknownKeySuggestsTheNearestOne) {
   EXPECT_EQ(d[0].str(), "model.yaml:24:5: joint 'gudgeon': unknown key 'clearence', did you mean 'clearance'?");
 }
 
-TEST(ModelLoader, LuGreFrictionIsNotAcceptedYet) {
-  // lugre is in the friction registry, but its bristle state is not integrated by the engine.
-  const auto d = problems(
-      with("    restitution: 0.9\n", "    restitution: 0.9\n    friction: {law: lugre}\n"));
-  ASSERT_EQ(d.size(), 1u);
-  EXPECT_EQ(d[0].str(),
-            "model.yaml:29:21: joint 'gudgeon' friction: friction law 'lugre' is not supported in "
-            "models yet (its bristle state is not integrated); use coulomb, ambrosio or "
-            "adams_stepped");
+TEST(ModelLoader, LuGreFrictionNeedsItsParameters) {
+  const auto ok = with("    restitution: 0.9\n",
+                       "    restitution: 0.9\n    friction: {law: lugre, sigma0: 1e5, sigma1: 316, "
+                       "mu_static: 0.15, mu_dynamic: 0.1, v_stribeck: 0.001}\n");
+  EXPECT_TRUE(problems(ok).empty());
+  const auto d = problems(with(
+      "    restitution: 0.9\n",
+      "    restitution: 0.9\n    friction: {law: lugre, sigma0: 1e5, sigma1: 316, "
+      "mu_static: 0.05, mu_dynamic: 0.1}\n"));
+  ASSERT_EQ(d.size(), 2u);
+  EXPECT_NE(d[0].str().find("missing required key 'v_stribeck'"), std::string::npos) << d[0].str();
+  EXPECT_NE(d[1].str().find("mu_static must be >= mu_dynamic, got 0.05 < 0.1"), std::string::npos)
+      << d[1].str();
 }
 
 TEST(ModelLoader, EveryProblemIsListedAtOnce) {

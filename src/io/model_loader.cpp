@@ -566,11 +566,6 @@ class Loader {
     auto& p = cl.friction;
     switch (*l) {
       case FrictionLaw::none: break;
-      case FrictionLaw::lugre:  // its bristle state z is not integrated by the engine yet
-        r_.error(f.get("law"), f.element(),
-                 "friction law 'lugre' is not supported in models yet (its bristle state is "
-                 "not integrated); use coulomb, ambrosio or adams_stepped");
-        break;
       case FrictionLaw::coulomb: p.mu = f.required_number("mu", "", non_negative, 0); break;
       case FrictionLaw::ambrosio:
         p.mu = f.required_number("mu", "", non_negative, 0);
