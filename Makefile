@@ -3,7 +3,7 @@ BUILD      ?= build
 JOBS       ?= $(shell nproc)
 CMAKE_ARGS ?=
 
-.PHONY: deps build demo test test-sanitize fuzz bench clean
+.PHONY: deps build demo test test-sanitize test-tsan fuzz bench clean
 
 deps:
 	@bash scripts/install-deps.sh
@@ -24,11 +24,22 @@ test-sanitize: deps
 	@cmake --build build-sanitize -j $(JOBS)
 	cd build-sanitize && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 ctest --output-on-failure -j $(JOBS)
 
+# The code that runs on several threads (concurrent simulations, FFTW planning) under
+# ThreadSanitizer: only test_threads and test_signal are built and run, in build-tsan/.
+# halt_on_error: the first report fails the target; tests/tsan.supp lists accepted reports.
+test-tsan: deps
+	@cmake -S . -B build-tsan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DLASH_TSAN=ON -DLASH_BENCH=OFF >/dev/null
+	@cmake --build build-tsan -j $(JOBS) --target test_threads test_signal
+	for t in test_threads test_signal; do \
+	  TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1 suppressions=$(CURDIR)/tests/tsan.supp" \
+	    build-tsan/tests/$$t || exit 1; \
+	done
+
 bench: build
 	$(BUILD)/bench/bench_flores
 
 clean:
-	rm -rf $(BUILD) build-sanitize build-fuzz out
+	rm -rf $(BUILD) build-sanitize build-tsan build-fuzz out
 
 # libFuzzer on the model loader (clang, ASan/UBSan) in build-fuzz/; LASH_FUZZ_SECONDS=300 for longer.
 fuzz: deps

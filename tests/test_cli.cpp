@@ -255,3 +255,30 @@ TEST(Cli, TuneAbsorberRejectsBadInputWithExitTwo) {
     EXPECT_NE(r.out.find(c.message), std::string::npos) << c.args << "\n" << r.out;
   }
 }
+
+TEST(Cli, ExpressionFailingMidRunExitsOneWithASummary) {
+  // A load valid at t = 0 that muparser cannot evaluate from t = 1 ms on: exit 1 with the
+  // results so far, not an abort (134) on an uncaught mu::ParserError.
+  const fs::path dir = temp_dir("expr");
+  fs::create_directories(dir);
+  const std::string text = "step(time, 0, 0, 1e-3 - time, 1)";
+  std::ofstream(dir / "expr.yaml") << "gravity: [0, 0]\n"
+                                      "bodies:\n  block: {mass: 2.0, inertia: 1e-3}\n"
+                                      "loads:\n  push: {type: force, point: block, fx: \""
+                                   << text
+                                   << "\", fy: \"0\"}\n"
+                                      "solver: {end_time: 2e-3, output_interval: 1e-4, "
+                                      "initial_state: given}\n";
+  const fs::path out = dir / "out";
+  const Result r = run_lash("run " + (dir / "expr.yaml").string() + " -q -o " + out.string());
+  EXPECT_EQ(r.code, 1) << r.out;
+  EXPECT_NE(r.out.find("simulation stopped at t = "), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("expression '" + text + "'"), std::string::npos) << r.out;
+  ASSERT_TRUE(fs::exists(out / "summary.json")) << r.out;
+  const auto j = nlohmann::json::parse(std::ifstream(out / "summary.json"));
+  EXPECT_FALSE(j["status"]["ok"].get<bool>());
+  EXPECT_GE(j["status"]["time"].get<double>(), 1e-3);
+  EXPECT_NE(j["status"]["message"].get<std::string>().find(text), std::string::npos);
+  EXPECT_GT(line_count(out / "timeseries.csv"), 2u);
+  fs::remove_all(dir);
+}

@@ -339,3 +339,44 @@ solver: {rtol: 1e-10, atol: 1e-13, end_time: 0.6, output_interval: 1e-5, initial
   // The stop is an applied force, so its work is input: kinetic − input stays constant.
   EXPECT_NEAR(bal.back(), bal.front(), 1e-9);
 }
+
+TEST(Workspace, MovedWorkspacesKeepTheirExpressions) {
+  // A free 2 kg block pushed by fx = 1000·t (no gravity): ẍ = F/m = 500·t m/s², exactly, from
+  // a Workspace that was moved, move-assigned, or moved by a std::vector that reallocated.
+  const std::string yaml = R"Y(
+gravity: [0, 0]
+bodies:
+  block: {mass: 2.0, inertia: 1e-3}
+loads:
+  push: {type: force, point: block, fx: "1000*time", fy: "0"}
+solver: {end_time: 1.0, output_interval: 0.1, initial_state: given}
+)Y";
+  const Model m = load_model_text(yaml, "free_block.yaml").model;
+  auto check = [&](Workspace& ws, double t, const std::string& how) {
+    const Eigen::VectorXd y = initial_state(m, ws);
+    Eigen::VectorXd ydot(ws.ny);
+    ASSERT_TRUE(evaluate(m, ws, t, y.data(), ydot.data())) << how;
+    EXPECT_EQ(ydot[ws.nq + 0], 1000.0 * t / 2.0) << how;  // ẍ = F/m
+    EXPECT_EQ(ydot[ws.nq + 1], 0.0) << how;
+  };
+  Workspace original(m);
+  check(original, 0.5, "in place");
+  Workspace moved(std::move(original));
+  check(moved, 0.25, "move-constructed");
+  Workspace assigned(m);
+  assigned = std::move(moved);
+  check(assigned, 0.75, "move-assigned");
+
+  std::vector<Workspace> pool;
+  std::vector<size_t> capacities;
+  for (int i = 0; i < 9; ++i) {
+    pool.emplace_back(m);
+    capacities.push_back(pool.capacity());
+  }
+  ASSERT_NE(capacities.front(), capacities.back()) << "the vector never reallocated";
+  for (size_t i = 0; i < pool.size(); ++i)
+    check(pool[i], 0.1 * (i + 1), "vector element " + std::to_string(i));
+  pool.erase(pool.begin());  // move-assigns every later element one slot down
+  for (size_t i = 0; i < pool.size(); ++i)
+    check(pool[i], 0.2 + 0.1 * i, "after erase, element " + std::to_string(i));
+}

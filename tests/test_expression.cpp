@@ -45,3 +45,52 @@ TEST(Expression, ErrorsNameTheProblem) {
   EXPECT_NE(check_expression("rod.x", {"crank"}).find("rod.x"), std::string::npos);
   EXPECT_EQ(check_expression("rod.x + 1", {"rod"}), "");
 }
+
+TEST(Expression, SurvivesAMoveOfItsVariables) {
+  // muparser holds the addresses of the variables: a moved block must carry them along.
+  ExpressionVariables v;
+  v.body_names = {"block"};
+  Expression e("1000*time + block.vx", v);
+  ExpressionVariables moved(std::move(v));
+  moved.time = 0.5;
+  moved.body_state[3] = 2.0;  // block.vx
+  EXPECT_DOUBLE_EQ(e.eval(), 502.0);
+  ExpressionVariables assigned;
+  assigned = std::move(moved);
+  assigned.time = 0.25;
+  EXPECT_DOUBLE_EQ(e.eval(), 252.0);
+  // A copy is a separate block: the expression stays with the original.
+  ExpressionVariables copy = assigned;
+  copy.time = 9.0;
+  EXPECT_DOUBLE_EQ(e.eval(), 252.0);
+}
+
+TEST(Expression, FailureAfterTimeZeroIsAnExpressionError) {
+  // Valid at t = 0 (x1 = 1e-3 > x0 = 0), invalid from t = 1e-3 on.
+  const std::string text = "step(time, 0, 0, 1e-3 - time, 1)";
+  EXPECT_EQ(check_expression(text, {}), "");
+  ExpressionVariables v;
+  Expression e(text, v);
+  v.time = 0.5e-3;
+  EXPECT_NO_THROW(e.eval());
+  v.time = 2e-3;
+  try {
+    e.eval();
+    FAIL() << "no exception";
+  } catch (const ExpressionError& err) {
+    EXPECT_EQ(err.text(), text);
+    EXPECT_EQ(err.time(), 2e-3);
+    const std::string what = err.what();
+    EXPECT_NE(what.find("expression '" + text + "'"), std::string::npos) << what;
+    EXPECT_NE(what.find("at time 0.002 s"), std::string::npos) << what;
+    EXPECT_NE(what.find("x1 > x0"), std::string::npos) << what;  // muparser's message
+  }
+  // The derivative stencil reports the first failing sample and restores the time variable.
+  double f, fd, fdd;
+  v.time = 0.0;
+  EXPECT_THROW(e.eval_derivatives(1e-3, f, fd, fdd), ExpressionError);
+  EXPECT_EQ(static_cast<double>(v.time), 0.0);
+  // A lash exception derived from std::runtime_error, not mu::ParserError.
+  v.time = 1.0;
+  EXPECT_THROW(e.eval(), std::runtime_error);
+}

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <thread>
 
 #include "analysis/signal.hpp"
 
@@ -64,4 +65,37 @@ TEST(Decimation, KeepsSpikes) {
   EXPECT_EQ(*std::max_element(vo.begin(), vo.end()), 1e6);
   EXPECT_EQ(*std::min_element(vo.begin(), vo.end()), -5e5);
   for (size_t i = 1; i < to.size(); ++i) ASSERT_GT(to[i], to[i - 1]);
+}
+
+TEST(Spectrum, ConcurrentSpectraEqualSerialOnes) {
+  // FFTW's planner is serialized (fftw_make_planner_thread_safe): four threads planning,
+  // executing and destroying plans of different sizes at once get exactly the serial results.
+  std::vector<std::vector<double>> signals;
+  for (size_t n : {64, 100, 257, 1000, 1024, 4096, 999, 3000}) {
+    std::vector<double> x(n);
+    for (size_t i = 0; i < n; ++i) x[i] = std::sin(0.37 * i) + 0.1 * std::cos(2.1 * i) + 1e-3 * i;
+    signals.push_back(std::move(x));
+  }
+  auto spectra_of_all = [&] {
+    std::vector<Spectrum> out;
+    for (int repeat = 0; repeat < 20; ++repeat)
+      for (const auto& x : signals)
+        for (Window w : {Window::rectangular, Window::hann})
+          out.push_back(amplitude_spectrum(x, 1e-3, w));
+    return out;
+  };
+  const std::vector<Spectrum> serial = spectra_of_all();
+  std::vector<std::vector<Spectrum>> parallel(4);
+  std::vector<std::thread> threads;
+  for (auto& p : parallel) threads.emplace_back([&p, &spectra_of_all] { p = spectra_of_all(); });
+  for (auto& t : threads) t.join();
+  for (size_t k = 0; k < parallel.size(); ++k) {
+    ASSERT_EQ(parallel[k].size(), serial.size());
+    for (size_t i = 0; i < serial.size(); ++i) {
+      // Exact equality of every double: the same plans, the same arithmetic.
+      EXPECT_EQ(parallel[k][i].amplitude, serial[i].amplitude) << "thread " << k << ", #" << i;
+      EXPECT_EQ(parallel[k][i].psd, serial[i].psd) << "thread " << k << ", #" << i;
+      EXPECT_EQ(parallel[k][i].frequency, serial[i].frequency);
+    }
+  }
 }

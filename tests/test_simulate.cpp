@@ -199,3 +199,30 @@ TEST(Events, ModeAgreesWithTheGapThroughGrazingContacts) {
     EXPECT_GT(r.rec->events.size(), 100u) << integrator;
   }
 }
+
+TEST(Failure, ExpressionFailingMidRunStopsWithAStatus) {
+  // fx is valid at t = 0 and throws from t = 1 ms on (step() needs x1 = 1e-3 − t > x0 = 0): the
+  // run stops with a status naming the expression, on both integrators, instead of aborting.
+  const std::string text = "step(time, 0, 0, 1e-3 - time, 1)";
+  const std::string yaml = R"Y(
+gravity: [0, 0]
+bodies:
+  block: {mass: 2.0, inertia: 1e-3}
+loads:
+  push: {type: force, point: block, fx: ")Y" + text + R"Y(", fy: "0"}
+solver: {end_time: 2e-3, output_interval: 1e-4, initial_state: given}
+)Y";
+  for (const char* integrator : {"dopri5", "bdf"}) {
+    const SimRun r = run_text(yaml, {std::string("solver.integrator=") + integrator});
+    const RunStatus& st = r.result.status;
+    ASSERT_FALSE(st.ok) << integrator;
+    EXPECT_NE(st.message.find("expression '" + text + "'"), std::string::npos) << st.message;
+    EXPECT_NE(st.message.find("x1 > x0"), std::string::npos) << st.message;
+    EXPECT_GE(st.t, 1e-3) << integrator;  // the first time the expression cannot be evaluated
+    EXPECT_LT(st.t, 2e-3) << integrator;
+    // The outputs before the failure were delivered.
+    ASSERT_FALSE(r.rec->time.empty()) << integrator;
+    EXPECT_GT(r.rec->time.back(), 0.5e-3) << integrator;
+    EXPECT_LE(r.rec->time.back(), st.t) << integrator;
+  }
+}

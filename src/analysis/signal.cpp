@@ -8,6 +8,19 @@
 
 namespace lash {
 
+namespace {
+/// FFTW's planner (plan creation and fftw_destroy_plan) shares global state and is not
+/// thread-safe; fftw_execute is. FFTW ≥ 3.3.5 serializes the planner itself once
+/// fftw_make_planner_thread_safe() (libfftw3_threads) has been called: it installs hooks that
+/// take one global mutex around every planner call and every plan destruction. Installing the
+/// hooks races with planning, so it happens exactly once, before this file's first plan
+/// (a function-local static: thread-safe initialisation in C++11).
+void make_fftw_planner_thread_safe() {
+  static const bool done = (fftw_make_planner_thread_safe(), true);
+  (void)done;
+}
+}  // namespace
+
 void ChannelStats::add(double t, double v) {
   if (t < t0 || t > t1) return;
   if (n == 0) min = max = v;
@@ -39,6 +52,7 @@ Spectrum amplitude_spectrum(const std::vector<double>& x, double dt, Window wind
   }
   const size_t nf = n / 2 + 1;
   fftw_complex* out = fftw_alloc_complex(nf);
+  make_fftw_planner_thread_safe();
   fftw_plan plan = fftw_plan_dft_r2c_1d(static_cast<int>(n), in.data(), out, FFTW_ESTIMATE);
   fftw_execute(plan);
   Spectrum s;

@@ -4,6 +4,7 @@
 #include <sunlinsol/sunlinsol_dense.h>
 #include <sunmatrix/sunmatrix_dense.h>
 
+#include <exception>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -76,6 +77,11 @@ class CvodeBdf final : public Integrator {
     double t_ret = t_;
     last_error_.clear();
     const int flag = CVode(mem_, t_out, y_, &t_ret, CV_NORMAL);
+    if (pending_) {  // the right-hand side threw (e.g. an ExpressionError): CVODE has stopped
+      std::exception_ptr e = pending_;
+      pending_ = nullptr;
+      std::rethrow_exception(e);
+    }
     for (int i = 0; i < p_.n; ++i) y[i] = NV_Ith_S(y_, i);
     if (flag == CV_ROOT_RETURN) {
       ++events_;
@@ -117,8 +123,15 @@ class CvodeBdf final : public Integrator {
 
   static int rhs_cb(double t, N_Vector y, N_Vector ydot, void* data) {
     auto* self = static_cast<CvodeBdf*>(data);
-    const bool ok = self->p_.rhs(t, N_VGetArrayPointer(y), N_VGetArrayPointer(ydot));
-    return ok ? 0 : 1;  // 1: recoverable, CVODE retries with a smaller step
+    // No C++ exception may unwind through CVODE's C frames: keep it, make CVODE stop (a negative
+    // return is unrecoverable), and rethrow it from advance().
+    try {
+      const bool ok = self->p_.rhs(t, N_VGetArrayPointer(y), N_VGetArrayPointer(ydot));
+      return ok ? 0 : 1;  // 1: recoverable, CVODE retries with a smaller step
+    } catch (...) {
+      self->pending_ = std::current_exception();
+      return -1;
+    }
   }
   static int root_cb(double t, N_Vector y, double* g, void* data) {
     auto* self = static_cast<CvodeBdf*>(data);
@@ -141,6 +154,7 @@ class CvodeBdf final : public Integrator {
   long events_ = 0;
   IntegratorStats accumulated_;
   std::string last_error_;
+  std::exception_ptr pending_;  ///< thrown by the right-hand side during CVode()
 };
 
 }  // namespace

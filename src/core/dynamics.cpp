@@ -76,7 +76,7 @@ bool cholesky_solve(Eigen::MatrixXd& w, const std::vector<int>& first, const Eig
 void load_body_state(Workspace& ws, const double* y) {
   for (int b = 0; b < ws.nb; ++b) {
     const BodyKin& k = ws.kin[b];
-    double* s = &ws.vars->body_state[6 * b];
+    double* s = &ws.vars.body_state[6 * b];
     s[0] = k.r.x(), s[1] = k.r.y(), s[2] = k.phi;
     s[3] = k.v.x(), s[4] = k.v.y(), s[5] = k.omega;
   }
@@ -195,19 +195,18 @@ Workspace::Workspace(const Model& model) {
   i_input = i_dissipated + 1;
   ny = i_input + 1;
 
-  vars = std::make_unique<ExpressionVariables>();
-  for (const auto& b : model.bodies) vars->body_names.push_back(b.name);
-  vars->body_state.assign(6 * nb, 0.0);
+  for (const auto& b : model.bodies) vars.body_names.push_back(b.name);
+  vars.body_state.assign(6 * nb, 0.0);
   for (const auto& d : model.drivers)
     driver_expr.emplace_back(d.profile == DriverProfile::constant_speed ? "0" : d.expression,
-                             *vars);
+                             vars);
   for (const auto& l : model.loads) {
     std::vector<Expression> ex;
     if (l.type == LoadType::force) {
-      ex.emplace_back(l.fx, *vars);
-      ex.emplace_back(l.fy, *vars);
+      ex.emplace_back(l.fx, vars);
+      ex.emplace_back(l.fy, vars);
     } else if (l.type == LoadType::torque) {
-      ex.emplace_back(l.torque, *vars);
+      ex.emplace_back(l.torque, vars);
     }
     for (const auto& e : ex) loads_use_state |= e.depends_on_state();
     load_expr.push_back(std::move(ex));
@@ -241,7 +240,7 @@ bool evaluate(const Model& model, Workspace& ws, double t, const double* y, doub
   ++ws.rhs_evaluations;
   const int nq = ws.nq;
   update_kin(ws, y);
-  ws.vars->time = t;
+  ws.vars.time = t;
   if (ws.loads_use_state) load_body_state(ws, y);
 
   // Applied forces: gravity, then loads, then clearance contacts.

@@ -79,9 +79,8 @@ struct Workspace {
   std::vector<int> aux_driver;     ///< per driver: y index of its integrated speed, or −1
   std::vector<std::string> aux_names;  ///< per auxiliary state, `<element>.<state>`
 
-  // Expressions, compiled against `*vars` (owned through a pointer so that a moved workspace
-  // keeps its expressions bound).
-  std::unique_ptr<ExpressionVariables> vars;
+  // Expressions, compiled against `vars` (a moved workspace keeps them bound: expression.hpp).
+  ExpressionVariables vars;
   std::vector<Expression> driver_expr;              ///< per driver (or empty slot)
   std::vector<std::vector<Expression>> load_expr;   ///< per load: fx, fy or torque
   bool loads_use_state = false;

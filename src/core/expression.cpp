@@ -3,6 +3,7 @@
 #include <muParser.h>
 
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 
 #include "core/adams_functions.hpp"
@@ -36,12 +37,19 @@ void configure(mu::Parser& p, ExpressionVariables& vars) {
   for (const char* name : {"impact", "IMPACT"}) p.DefineFun(name, mu_impact);
   for (const char* name : {"bistop", "BISTOP"}) p.DefineFun(name, mu_bistop);
   p.DefineConst("pi", M_PI);
-  p.DefineVar("time", &vars.time);
-  p.DefineVar("t", &vars.time);
+  vars.time = static_cast<double>(vars.time);  // storage for a moved-from block, if need be
+  p.DefineVar("time", vars.time.address());
+  p.DefineVar("t", vars.time.address());
   vars.body_state.resize(6 * vars.body_names.size(), 0.0);
   for (size_t b = 0; b < vars.body_names.size(); ++b)
     for (int f = 0; f < 6; ++f)
       p.DefineVar(vars.body_names[b] + "." + kBodyFields[f], &vars.body_state[6 * b + f]);
+}
+
+std::string describe_failure(const std::string& text, double time, const std::string& message) {
+  char at[32];
+  std::snprintf(at, sizeof at, "%.9g", time);
+  return "expression '" + text + "' failed at time " + at + " s: " + message;
 }
 }  // namespace
 
@@ -49,10 +57,14 @@ struct Expression::Impl {
   mu::Parser parser;
 };
 
+ExpressionError::ExpressionError(const std::string& text, double time, const std::string& message)
+    : std::runtime_error(describe_failure(text, time, message)), text_(text), time_(time) {}
+
 Expression::Expression(const std::string& text, ExpressionVariables& vars)
-    : impl_(std::make_unique<Impl>()), vars_(&vars), text_(text) {
+    : impl_(std::make_unique<Impl>()), time_(nullptr), text_(text) {
   try {
     configure(impl_->parser, vars);
+    time_ = vars.time.address();
     impl_->parser.SetExpr(text);
     impl_->parser.Eval();  // compile now so errors surface at load time
     for (const auto& [name, ptr] : impl_->parser.GetUsedVar())
@@ -66,19 +78,31 @@ Expression::~Expression() = default;
 Expression::Expression(Expression&&) noexcept = default;
 Expression& Expression::operator=(Expression&&) noexcept = default;
 
-double Expression::eval() const { return impl_->parser.Eval(); }
+double Expression::eval() const {
+  try {
+    return impl_->parser.Eval();
+  } catch (const mu::Parser::exception_type& e) {  // mu::ParserError: no std::exception
+    throw ExpressionError(text_, *time_, e.GetMsg());
+  }
+}
 
 void Expression::eval_derivatives(double t, double& f, double& fdot, double& fddot) const {
   // 5-point central differences: truncation O(h⁴ f⁽⁶⁾) (O(h f''') across a kink such as the ends
   // of step5), round-off ~10ε|f|/h² ≈ 2e-5 |f| s⁻² at h = 1e-5 s.
   constexpr double h = 1e-5;
-  const double saved = vars_->time;
+  const double saved = *time_;
   double v[5];
   for (int k = -2; k <= 2; ++k) {
-    vars_->time = t + k * h;
-    v[k + 2] = impl_->parser.Eval();
+    *time_ = t + k * h;
+    try {
+      v[k + 2] = impl_->parser.Eval();
+    } catch (const mu::Parser::exception_type& e) {
+      const double at = *time_;
+      *time_ = saved;
+      throw ExpressionError(text_, at, e.GetMsg());
+    }
   }
-  vars_->time = saved;
+  *time_ = saved;
   f = v[2];
   fdot = (v[0] - 8.0 * v[1] + 8.0 * v[3] - v[4]) / (12.0 * h);
   fddot = (-v[0] + 16.0 * v[1] - 30.0 * v[2] + 16.0 * v[3] - v[4]) / (12.0 * h * h);

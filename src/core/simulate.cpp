@@ -104,7 +104,8 @@ void Simulator::resume(const State& state) {
 
 State Simulator::snapshot() const { return {t_, y_, ws_.contact, integrator_->step_hint()}; }
 
-bool Simulator::advance_to(double t_target, Observer* observer) {
+// A function-try-block: an expression failing mid-run (ExpressionError) is a numerical failure.
+bool Simulator::advance_to(double t_target, Observer* observer) try {
   while (t_ < t_target) {
     const Advance adv = integrator_->advance(t_target, y_);
     t_ = adv.t;
@@ -160,6 +161,9 @@ bool Simulator::advance_to(double t_target, Observer* observer) {
     integrator_->reset(adv.t, y_);
   }
   return true;
+} catch (const ExpressionError& e) {
+  status_ = {false, e.time(), "", e.what()};
+  return false;
 }
 
 SectionPlane parse_section_plane(const Model& model, const std::string& spec) {
@@ -267,7 +271,13 @@ RunResult simulate(const Model& model, Workspace& ws, Observer& observer,
   };
 
   auto evaluate_here = [&](double t) {
-    const bool finite = evaluate(model, ws, t, y.data(), ydot.data());
+    bool finite = false;
+    try {
+      finite = evaluate(model, ws, t, y.data(), ydot.data());
+    } catch (const ExpressionError& e) {  // an expression failing mid-run: a numerical failure
+      result.status = {false, e.time(), "", e.what()};
+      return false;
+    }
     if (!finite)
       result.status = {false, t, "", "the state or its derivative is not finite (NaN/Inf); " +
                                          describe_contacts(model, ws)};

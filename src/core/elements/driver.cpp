@@ -40,7 +40,7 @@ void driver_motion(const Model& model, const Workspace& ws, int d, double t, con
 void driver_constrain(const Model& model, const Workspace& ws, int d, double t, const double* y,
                       int row, ConstraintOut& out) {
   const Driver& drv = model.drivers[d];
-  double f, fd, fdd;
+  double f = 0.0, fd = 0.0, fdd = 0.0;
   driver_motion(model, ws, d, t, y, f, fd, fdd);
   if (drv.target == DriverTarget::body) {
     const BodyKin& k = ws.kin_of(drv.body);
