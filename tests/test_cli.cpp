@@ -282,3 +282,37 @@ TEST(Cli, ExpressionFailingMidRunExitsOneWithASummary) {
   EXPECT_GT(line_count(out / "timeseries.csv"), 2u);
   fs::remove_all(dir);
 }
+
+TEST(Cli, RunContinuesFromASavedStateTimeAndAll) {
+  const fs::path dir = temp_dir("from");
+  const fs::path a = dir / "a", b = dir / "b", bad = dir / "bad";
+  Result r = run_lash("run " + example() + " -q -o " + a.string() + " --set solver.end_time=0.012");
+  ASSERT_EQ(r.code, 0) << r.out;
+  ASSERT_TRUE(fs::exists(a / "final_state.json"));
+  const auto state = nlohmann::json::parse(std::ifstream(a / "final_state.json"));
+  EXPECT_EQ(state["t"].get<double>(), 0.012);
+  EXPECT_EQ(state["names"].size(), state["y"].size());
+  r = run_lash("run " + example() + " -q -o " + b.string() + " --from " +
+               (a / "final_state.json").string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto summary = nlohmann::json::parse(std::ifstream(b / "summary.json"));
+  EXPECT_EQ(summary["start"]["time"].get<double>(), 0.012);
+  EXPECT_EQ(summary["status"]["time"].get<double>(), 0.024);
+  EXPECT_NE(summary["start"]["from"].get<std::string>().find("final_state.json"), std::string::npos);
+  std::ifstream ts(b / "timeseries.csv");
+  std::string header, first;
+  std::getline(ts, header);
+  std::getline(ts, first);
+  EXPECT_EQ(first.substr(0, first.find(',')), "0.012");
+  EXPECT_EQ(summary["channels"]["rod_slider.Fn"]["unit"].get<std::string>(), "N");
+  // A state of another model, and one already at end_time: exit 2, nothing run.
+  r = run_lash("run " + lash::test::example_path("flores_slider_crank_ideal.yaml") + " -q -o " +
+               bad.string() + " --from " + (a / "final_state.json").string());
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("does not match the model"), std::string::npos) << r.out;
+  r = run_lash("run " + example() + " -q -o " + bad.string() + " --set solver.end_time=0.012 --from " +
+               (a / "final_state.json").string());
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("not before the model's end_time"), std::string::npos) << r.out;
+  fs::remove_all(dir);
+}

@@ -273,3 +273,50 @@ TEST(Overrides, FlowListsAndMaps) {
   EXPECT_EQ(d[0].line, 0);
   EXPECT_NE(d[0].message.find("(value set with --set)"), std::string::npos) << d[0].str();
 }
+
+TEST(ModelLoader, NewElementsAreCheckedWithLocatedMessages) {
+  const std::string yaml = R"(name: bad_elements
+bodies:
+  arm: {mass: 1, inertia: 0.01, markers: {P: [0.1, 0]}}
+  bob: {mass: 0.1, angle: 0.3}
+joints:
+  pin: {type: revolute, journal: arm, bearing: ground}
+drivers:
+  turn: {body: bob, coordinate: phi, speed: 1}
+loads:
+  mount: {type: bushing, from: arm.P, to: bob, frame: wheel, stiffness: [1, 1]}
+sensors:
+  acc: {type: accelerometer, at: arm.Q, axis: [1, 0]}
+  probe: {type: velocity, at: arm.P, gravity: true}
+solver: {end_time: 1}
+)";
+  const auto d = problems(yaml);
+  std::vector<std::string> got;
+  for (const auto& x : d) got.push_back(x.str());
+  auto has = [&](const std::string& text) {
+    for (const auto& g : got)
+      if (g.find(text) != std::string::npos) return true;
+    return false;
+  };
+  EXPECT_TRUE(has("model.yaml:4:27: body 'bob': a body without 'inertia' is a point mass, which has no angle"))
+      << ::testing::PrintToString(got);
+  EXPECT_TRUE(has("model.yaml:8:16: driver 'turn': body 'bob' is a point mass (no inertia): it has no angle to drive"))
+      << ::testing::PrintToString(got);
+  EXPECT_TRUE(has("model.yaml:10:55: load 'mount': unknown body 'wheel'")) << ::testing::PrintToString(got);
+  EXPECT_TRUE(has("model.yaml:12:34: sensor 'acc': unknown marker 'Q' on body 'arm'")) << ::testing::PrintToString(got);
+  EXPECT_TRUE(has("sensor 'probe': 'gravity' applies to accelerometers only")) << ::testing::PrintToString(got);
+}
+
+TEST(ModelLoader, FinalizeProblemsPointAtTheElement) {
+  // A torque on a point mass is found by the core's finalize; the message still points into the file.
+  const std::string yaml = R"(name: torque_on_point
+bodies:
+  bob: {mass: 0.1}
+loads:
+  twist: {type: torque, body: bob, torque: "1"}
+solver: {end_time: 1}
+)";
+  const auto d = problems(yaml);
+  ASSERT_EQ(d.size(), 1u);
+  EXPECT_EQ(d[0].str(), "model.yaml:5:10: load 'twist': body 'bob' is a point mass: it takes no torque");
+}

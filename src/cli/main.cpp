@@ -14,6 +14,7 @@
 #include "io/model_loader.hpp"
 #include "io/report.hpp"
 #include "io/results_writer.hpp"
+#include "io/state_file.hpp"
 
 namespace {
 
@@ -78,6 +79,11 @@ int main(int argc, char** argv) {
                   "--set drivers.crank.speed_rpm=3000 --set solver.integrator=bdf")
       ->take_all();
   run->add_flag("-q,--quiet", quiet, "No progress line and no closing summary");
+  std::string from_state;
+  run->add_option("--from", from_state,
+                  "Continue from a saved state (a run's final_state.json), time and all, to the "
+                  "model's end_time")
+      ->check(CLI::ExistingFile);
   bool with_report = false;
   run->add_flag("--report", with_report,
                 "Also analyse the run and write report.html, report_data.json and figures/");
@@ -226,6 +232,28 @@ int main(int argc, char** argv) {
 
   if (out_dir.empty())
     out_dir = "out/" + std::filesystem::path(model_path).stem().string();
+  if (with_report && !from_state.empty()) {
+    std::cerr << "error: --report analyses a whole run from t = 0; run without --from to get a "
+                 "report, or report on the earlier run's folder\n";
+    return 2;
+  }
+  lash::RunOptions run_options;
+  lash::State start;
+  if (!from_state.empty()) {
+    try {
+      lash::Workspace probe(model);
+      start = lash::read_state(from_state, model, probe);
+      if (!(start.t < model.solver.end_time))
+        throw std::runtime_error(from_state + ": the state is at t = " + fmt::format("{:g}", start.t) +
+                                 " s, not before the model's end_time = " +
+                                 fmt::format("{:g}", model.solver.end_time) +
+                                 " s; raise it with --set solver.end_time=...");
+    } catch (const std::exception& e) {
+      std::cerr << "error: " << e.what() << "\n";
+      return 2;
+    }
+    run_options.from = &start;
+  }
   try {
     lash::Workspace ws(model);
     lash::ResultsWriter writer(model, out_dir);
@@ -238,13 +266,13 @@ int main(int argc, char** argv) {
         result = rr.result;
       } else {
         ProgressObserver observer(&writer, !quiet && isatty(STDERR_FILENO));
-        result = lash::simulate(model, ws, observer);
+        result = lash::simulate(model, ws, observer, {}, {}, run_options);
       }
     } catch (const std::runtime_error& e) {  // no consistent initial state
       std::cerr << model_path << ": " << e.what() << "\n";
       return 2;
     }
-    writer.finish(result, loaded.resolved_yaml, overrides);
+    writer.finish(result, loaded.resolved_yaml, overrides, from_state);
 
     // The report covers what was computed, up to a failure too.
     std::vector<std::string> report_notes;

@@ -84,7 +84,7 @@ void ResultsWriter::event(const ContactEvent& e, const Workspace& ws) {
 }
 
 void ResultsWriter::finish(const RunResult& r, const std::string& resolved_yaml,
-                           const std::vector<std::string>& overrides) {
+                           const std::vector<std::string>& overrides, const std::string& from) {
   using nlohmann::json;
   std::fflush(ts_);
   std::fflush(ev_);
@@ -130,6 +130,7 @@ void ResultsWriter::finish(const RunResult& r, const std::string& resolved_yaml,
                      {"wall_seconds", r.wall_seconds},
                      {"outputs", r.outputs}};
   j["max_constraint_violation"] = r.max_constraint_violation;
+  j["start"] = {{"time", t_first_}, {"from", from.empty() ? nlohmann::json() : json(from)}};
   j["integrator"]["missed_events"] = r.missed_events;
   const SolverSettings& s = model_.solver;
   j["model"] = {{"name", model_.name},

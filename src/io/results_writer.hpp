@@ -26,8 +26,9 @@ class ResultsWriter : public Observer {
 
   /// Writes summary.json (with every channel's unit and description) and final_state.json, and
   /// closes the files. `resolved_yaml` is the model as run.
+  /// `from` names the state file the run continued from ("" for a run from t = 0).
   void finish(const RunResult& result, const std::string& resolved_yaml,
-              const std::vector<std::string>& overrides);
+              const std::vector<std::string>& overrides, const std::string& from = "");
 
  private:
   struct Peak {

@@ -1,0 +1,346 @@
+// Physics of the element kinds in core/elements: point masses, distance joints, sensors,
+// bushings, body and speed-profile drivers, clearance-joint force channels, LuGre friction in a
+// clearance joint, restartable state and finalize's checks.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+
+#include "core/elements/registry.hpp"
+#include "core/finalize.hpp"
+#include "io/state_file.hpp"
+#include "test_support.hpp"
+
+namespace lash::test {
+namespace {
+
+constexpr double kG = 9.81;
+
+/// Largest |balance − balance(0)| relative to the largest energy magnitude seen.
+double balance_drift(const Recorder& r) {
+  const auto& b = r["energy.balance"];
+  double drift = 0, scale = 1e-300;
+  for (size_t i = 0; i < b.size(); ++i) {
+    drift = std::max(drift, std::abs(b[i] - b[0]));
+    for (const char* c : {"energy.kinetic", "energy.potential", "energy.input"})
+      scale = std::max(scale, std::abs(r[c][i]));
+  }
+  return drift / scale;
+}
+
+TEST(Sensors, AccelerometerOnAUniformlyRotatingDiscReadsCentripetalAndGravity) {
+  // A disc turning at ω about its centre pinned to the ground; accelerometers at r = 0.1 m on
+  // the body's x axis. Kinematic reading along the body axis: −ω² r (ω² r inward). With gravity
+  // (specific force a − g, g = (0, −9.81)): −ω² r + g sin φ. Along the ground's x axis:
+  // −ω² r cos φ.
+  const double omega = 30.0, r = 0.1;
+  const std::string yaml = R"(
+name: disc
+gravity: [0, -9.81]
+bodies:
+  disc: {mass: 2, inertia: 0.01, position: [0, 0], markers: {O: [0, 0], P: [0.1, 0]}}
+joints:
+  pivot: {type: revolute, journal: disc.O, bearing: ground}
+drivers:
+  spin: {joint: pivot, speed: 30}
+sensors:
+  acc_kin: {type: accelerometer, at: disc.P, axis: [1, 0], gravity: false}
+  acc_sf:  {type: accelerometer, at: disc.P, axis: [1, 0]}
+  acc_w:   {type: accelerometer, at: disc.P, axis: [1, 0], frame: ground, gravity: false}
+  vel:     {type: velocity, at: disc.P, axis: [0, 1]}
+  pos:     {type: displacement, at: disc.P, axis: [1, 0], frame: ground}
+solver: {end_time: 0.3, output_interval: 1e-3}
+)";
+  const SimRun s = run_text(yaml);
+  ASSERT_TRUE(s.result.status.ok) << s.result.status.message;
+  const Recorder& rec = *s.rec;
+  for (size_t i = 0; i < rec.time.size(); ++i) {
+    const double phi = rec["disc.phi"][i];
+    EXPECT_NEAR(rec["acc_kin.a"][i], -omega * omega * r, 1e-6);
+    EXPECT_NEAR(rec["acc_sf.a"][i], -omega * omega * r + kG * std::sin(phi), 1e-6);
+    EXPECT_NEAR(rec["acc_w.a"][i], -omega * omega * r * std::cos(phi), 1e-6);
+    EXPECT_NEAR(rec["vel.v"][i], omega * r, 1e-8);  // body y axis: the tangential velocity
+    EXPECT_NEAR(rec["pos.x"][i], r * std::cos(phi), 1e-9);
+  }
+}
+
+TEST(PointMass, PendulumPeriodMatchesTheEllipticClosedForm) {
+  // A point-mass bob on a massless rod (distance joint) of L = 1 m released from θ0 = 60°:
+  // T = 4 sqrt(L/g) K(sin(θ0/2)) (complete elliptic integral of the first kind).
+  const double L = 1.0, theta0 = M_PI / 3;
+  const std::string yaml = "name: pendulum\ngravity: [0, -9.81]\nbodies:\n  bob: {mass: 0.5, position: [" +
+                           std::to_string(L * std::sin(theta0)) + ", " +
+                           std::to_string(-L * std::cos(theta0)) + R"(]}
+joints:
+  rod: {type: distance, from: ground, to: bob, length: 1.0}
+solver: {end_time: 6, output_interval: 1e-3, initial_state: given, rtol: 1e-10, atol: 1e-12}
+)";
+  const SimRun s = run_text(yaml);
+  ASSERT_TRUE(s.result.status.ok) << s.result.status.message;
+  const Recorder& r = *s.rec;
+  // Upward crossings of x = 0, located by linear interpolation.
+  std::vector<double> up;
+  const auto& x = r["bob.x"];
+  for (size_t i = 1; i < x.size(); ++i)
+    if (x[i - 1] < 0 && x[i] >= 0)
+      up.push_back(r.time[i - 1] + (r.time[i] - r.time[i - 1]) * (-x[i - 1]) / (x[i] - x[i - 1]));
+  ASSERT_GE(up.size(), 2u);
+  const double period = (up.back() - up.front()) / (up.size() - 1);
+  const double exact = 4.0 * std::sqrt(L / kG) * std::comp_ellint_1(std::sin(theta0 / 2));
+  EXPECT_NEAR(period / exact, 1.0, 1e-6) << period << " vs " << exact;
+  // Rod length held, energy conserved, and the rod tension at the bottom m(g + v²/L).
+  EXPECT_LT(s.result.max_constraint_violation, 1e-9);
+  EXPECT_LT(balance_drift(r), 1e-8);
+  double tension_max = 0;
+  for (double t : r["rod.tension"]) tension_max = std::max(tension_max, t);
+  const double v2 = 2 * kG * L * (1 - std::cos(theta0));
+  EXPECT_NEAR(tension_max, 0.5 * (kG + v2 / L), 1e-3 * 0.5 * (kG + v2 / L));
+}
+
+TEST(Bushing, FramedOnARotatingBodyConservesEnergyAndDissipatesOnlyWithDamping) {
+  // A point mass hung from a swinging rigid arm by a two-axis bushing in the arm's frame: the
+  // bushing's axes turn with the arm, so its moment on the arm must include that turning for
+  // T + V to be conserved (core/elements/bushing.cpp).
+  const std::string yaml = R"(
+name: arm_absorber
+gravity: [0, -9.81]
+bodies:
+  arm: {mass: 1.0, inertia: 0.02, position: [0.2, 0], markers: {O: [-0.2, 0], P: [0.2, 0]}}
+  tmd: {mass: 0.1, position: [0.42, 0.01]}
+joints:
+  pivot: {type: revolute, journal: arm.O, bearing: ground}
+loads:
+  mount: {type: bushing, from: arm.P, to: tmd, stiffness: [400, 900], damping: DAMP}
+solver: {end_time: 2, output_interval: 1e-3, initial_state: given, rtol: 1e-10, atol: 1e-12}
+)";
+  auto with = [&](const std::string& damp) {
+    std::string y = yaml;
+    y.replace(y.find("DAMP"), 4, damp);
+    return run_text(y);
+  };
+  const SimRun free = with("0");
+  ASSERT_TRUE(free.result.status.ok) << free.result.status.message;
+  EXPECT_LT(balance_drift(*free.rec), 1e-8);
+  EXPECT_NEAR(free.rec->operator[]("energy.dissipated").back(), 0.0, 1e-12);
+  const SimRun damped = with("[0.5, 2]");
+  ASSERT_TRUE(damped.result.status.ok);
+  EXPECT_LT(balance_drift(*damped.rec), 1e-8);
+  const auto& d = (*damped.rec)["energy.dissipated"];
+  EXPECT_GT(d.back(), 1e-4);
+  for (size_t i = 1; i < d.size(); ++i) EXPECT_GE(d[i], d[i - 1] - 1e-15);
+  // The power channel is the rate of the bushing's work: −d(V)/dt − dissipation, i.e. its
+  // integral equals −(ΔV_bushing + dissipated); check against the trapezoid of the channel.
+  const auto& p = (*damped.rec)["mount.power"];
+  double work = 0;
+  for (size_t i = 1; i < p.size(); ++i) work += 0.5 * (p[i] + p[i - 1]) * 1e-3;
+  const auto& dx = (*damped.rec)["mount.dx"];
+  const auto& dy = (*damped.rec)["mount.dy"];
+  auto v = [&](size_t i) { return 0.5 * 400 * dx[i] * dx[i] + 0.5 * 900 * dy[i] * dy[i]; };
+  EXPECT_NEAR(work, -(v(p.size() - 1) - v(0)) - d.back(), 2e-3 * d.back());
+}
+
+TEST(ClearanceJoint, ForceChannelsEqualTheContactForceRecomputed) {
+  // Fx, Fy are the force on the journal, −F_N n + F_T t with n = e/|e| and t = perp(n).
+  const SimRun s = run_example("flores_slider_crank.yaml",
+                               {"solver.end_time=0.012",
+                                "clearance_defaults.friction={law: coulomb, mu: 0.1}"});
+  ASSERT_TRUE(s.result.status.ok);
+  const Recorder& r = *s.rec;
+  int in_contact = 0;
+  for (size_t i = 0; i < r.time.size(); ++i) {
+    const Vec2 e(r["rod_slider.ex"][i], r["rod_slider.ey"][i]);
+    const Vec2 n = e / e.norm(), t = perp(n);
+    const Vec2 f = -r["rod_slider.Fn"][i] * n + r["rod_slider.Ft"][i] * t;
+    const double tol = 1e-7 * std::max(1.0, f.norm());  // the CSV-free path: doubles
+    EXPECT_NEAR(r["rod_slider.Fx"][i], f.x(), tol);
+    EXPECT_NEAR(r["rod_slider.Fy"][i], f.y(), tol);
+    EXPECT_NEAR(r["rod_slider.F"][i], f.norm(), tol);
+    in_contact += r["rod_slider.Fn"][i] > 0 && std::abs(r["rod_slider.Ft"][i]) > 0;
+  }
+  EXPECT_GT(in_contact, 10);
+}
+
+TEST(ClearanceJoint, LuGreFrictionKeepsTheEnergyBalance) {
+  // LuGre in the Flores joint (Canudas de Wit et al. 1995 values scaled to μ_d = 0.1): the
+  // balance T + V + dissipated − input stays constant, and the dissipated energy never falls
+  // by more than the largest energy the bristles can hold, F_N σ0 z²/2 with |z| ≤ μ_s/σ0.
+  const SimRun s = run_example(
+      "flores_slider_crank.yaml",
+      {"solver.end_time=0.012",
+       "clearance_defaults.friction={law: lugre, sigma0: 1e5, sigma1: 316, sigma2: 0.004, "
+       "mu_static: 0.15, mu_dynamic: 0.1, v_stribeck: 0.001, v_damping: 0.001}"});
+  ASSERT_TRUE(s.result.status.ok) << s.result.status.message;
+  const Recorder& r = *s.rec;
+  EXPECT_LT(balance_drift(r), 1e-6);
+  double fn_max = 0, ft_max = 0;
+  for (size_t i = 0; i < r.time.size(); ++i) {
+    fn_max = std::max(fn_max, r["rod_slider.Fn"][i]);
+    ft_max = std::max(ft_max, std::abs(r["rod_slider.Ft"][i]));
+  }
+  ASSERT_GT(fn_max, 0);
+  EXPECT_GT(ft_max, 0);
+  const double bristle_max = fn_max * 0.15 * 0.15 / (2 * 1e5);
+  const auto& d = r["energy.dissipated"];
+  for (size_t i = 1; i < d.size(); ++i) EXPECT_GE(d[i], d[i - 1] - bristle_max);
+}
+
+TEST(Drivers, ASpeedProfileOfAConstantEqualsTheConstantSpeedDriver) {
+  const SimRun a = run_example("flores_slider_crank_ideal.yaml", {"solver.end_time=0.006"});
+  std::string yaml = read_file(example_path("flores_slider_crank_ideal.yaml"));
+  const size_t at = yaml.find("speed_rpm: 5000");
+  ASSERT_NE(at, std::string::npos);
+  yaml.replace(at, 15, "speed: \"5000*2*_pi/60 + 0*time\"");
+  const SimRun b = run_text(yaml, {"solver.end_time=0.006"});
+  ASSERT_TRUE(a.result.status.ok && b.result.status.ok) << b.result.status.message;
+  EXPECT_LT(max_abs_diff((*a.rec)["slider.x"], (*b.rec)["slider.x"]), 1e-9);
+  EXPECT_LT(max_abs_diff((*a.rec)["crank.torque"], (*b.rec)["crank.torque"]), 1e-6);
+}
+
+TEST(Drivers, ABodyDriverLetsTheDrivenJointHaveClearance) {
+  // The crank's angle prescribed relative to the ground, and its own pivot a clearance joint.
+  std::string yaml = read_file(example_path("flores_slider_crank.yaml"));
+  const size_t at = yaml.find("joint: crank_pivot");
+  ASSERT_NE(at, std::string::npos);
+  yaml.replace(at, 18, "body: crank\n    coordinate: phi");
+  const SimRun s = run_text(yaml, {"solver.end_time=0.012", "joints.crank_pivot.clearance=0.2e-3"});
+  ASSERT_TRUE(s.result.status.ok) << s.result.status.message;
+  const Recorder& r = *s.rec;
+  for (size_t i = 0; i < r.time.size(); ++i)
+    EXPECT_NEAR(r["crank.phi"][i], 5000 * 2 * M_PI / 60 * r.time[i], 1e-8);
+  int pivot_events = 0;
+  for (const auto& e : r.events) pivot_events += e.clearance == 0;
+  EXPECT_GT(pivot_events, 0);
+  EXPECT_LT(balance_drift(r), 1e-6);
+}
+
+TEST(State, AContinuedRunIsBitIdenticalToOneRestartedThere) {
+  // Run 1: 0 → T with an integrator restart at T/2. Run 2: 0 → T/2, state saved to
+  // final_state.json and read back. Run 3: T/2 → T from that file. Runs 1 and 3 agree bit for
+  // bit after T/2 (chaotic Flores motion: any difference would grow).
+  Model m = load_model_file(example_path("flores_slider_crank.yaml"), {"solver.end_time=0.024"}).model;
+  const double half = 0.012;
+  Workspace w1(m);
+  Recorder r1(m);
+  RunOptions restart;
+  restart.restarts = {half};
+  ASSERT_TRUE(simulate(m, w1, r1, {}, {}, restart).status.ok);
+
+  Model m_half = m;
+  m_half.solver.end_time = half;
+  Workspace w2(m_half);
+  Recorder r2(m_half);
+  const RunResult first = simulate(m_half, w2, r2);
+  ASSERT_TRUE(first.status.ok);
+  const std::string path = ::testing::TempDir() + "lash_state_test.json";
+  write_state(path, m_half, w2, first.final_state);
+  Workspace w3(m);
+  const State st = read_state(path, m, w3);
+  EXPECT_EQ(st.t, half);
+  ASSERT_EQ(st.y.size(), first.final_state.y.size());
+  for (int i = 0; i < st.y.size(); ++i) EXPECT_EQ(st.y[i], first.final_state.y[i]) << i;
+  Recorder r3(m);
+  RunOptions from;
+  from.from = &st;
+  ASSERT_TRUE(simulate(m, w3, r3, {}, {}, from).status.ok);
+
+  ASSERT_EQ(r3.time.front(), half);
+  const size_t k0 = std::find(r1.time.begin(), r1.time.end(), half) - r1.time.begin();
+  ASSERT_LT(k0, r1.time.size());
+  ASSERT_EQ(r1.time.size() - k0, r3.time.size());
+  for (const auto& [name, v3] : r3.data) {
+    const auto& v1 = r1[name];
+    for (size_t i = 0; i < v3.size(); ++i) ASSERT_EQ(v1[k0 + i], v3[i]) << name << " at " << r3.time[i];
+  }
+  std::filesystem::remove(path);
+}
+
+TEST(State, AContinuedRunAgreesWithAnUninterruptedOneOnARegularModel) {
+  Model m = load_model_file(example_path("flores_slider_crank_ideal.yaml"), {"solver.end_time=0.012"}).model;
+  Workspace w1(m);
+  Recorder r1(m);
+  ASSERT_TRUE(simulate(m, w1, r1).status.ok);
+  Model m_half = m;
+  m_half.solver.end_time = 0.006;
+  Workspace w2(m_half);
+  Recorder r2(m_half);
+  const RunResult first = simulate(m_half, w2, r2);
+  Workspace w3(m);
+  Recorder r3(m);
+  RunOptions from;
+  from.from = &first.final_state;
+  ASSERT_TRUE(simulate(m, w3, r3, {}, {}, from).status.ok);
+  const size_t k0 = r1.time.size() - r3.time.size();
+  for (const char* c : {"slider.x", "rod.phi", "crank_pivot.F"})
+    for (size_t i = 0; i < r3.time.size(); ++i)
+      EXPECT_NEAR(r1[c][k0 + i], r3[c][i], 1e-7 * (1 + std::abs(r1[c][k0 + i]))) << c;
+}
+
+TEST(State, AStateOfAnotherModelIsRefusedWithWhatDiffers) {
+  Model flores = load_model_file(example_path("flores_slider_crank.yaml"), {"solver.end_time=0.001"}).model;
+  Model ideal = load_model_file(example_path("flores_slider_crank_ideal.yaml")).model;
+  Workspace wf(flores), wi(ideal);
+  Recorder r(flores);
+  const RunResult res = simulate(flores, wf, r);
+  const std::string path = ::testing::TempDir() + "lash_state_other.json";
+  write_state(path, flores, wf, res.final_state);
+  try {
+    read_state(path, ideal, wi);
+    FAIL() << "accepted a state of another model";
+  } catch (const std::runtime_error& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find(path), std::string::npos) << msg;
+    EXPECT_NE(msg.find("does not match the model"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("rod_slider.impact_velocity"), std::string::npos) << msg;
+  }
+  std::filesystem::remove(path);
+}
+
+TEST(Finalize, ChecksModelsBuiltInCode) {
+  Model m;
+  m.name = "code";
+  Body a;
+  a.name = "a";
+  a.mass = 1;
+  a.inertia = 0.1;
+  Body p;
+  p.name = "p";
+  p.type = BodyType::point_mass;
+  p.mass = 0.2;
+  p.markers.push_back({"off", Vec2(0.1, 0)});
+  m.bodies = {a, p};
+  Load torque;
+  torque.name = "twist";
+  torque.type = LoadType::torque;
+  torque.body_a = 1;
+  m.loads.push_back(torque);
+  Driver d;
+  d.name = "spin";
+  d.target = DriverTarget::body;
+  d.body = 1;
+  d.coordinate = BodyCoordinate::phi;
+  m.drivers.push_back(d);
+  try {
+    finalize(m);
+    FAIL();
+  } catch (const InvalidModel& e) {
+    std::vector<std::string> got;
+    for (const auto& x : e.problems()) got.push_back(x.element + ": " + x.message);
+    ASSERT_EQ(got.size(), 3u) << e.what();
+    EXPECT_NE(got[0].find("body 'p': marker 'off' is off the point mass"), std::string::npos) << got[0];
+    EXPECT_NE(got[1].find("driver 'spin': body 'p' is a point mass"), std::string::npos) << got[1];
+    EXPECT_NE(got[2].find("load 'twist': body 'p' is a point mass: it takes no torque"), std::string::npos) << got[2];
+  }
+  EXPECT_THROW(Workspace{m}, std::invalid_argument);  // not finalized
+}
+
+TEST(Finalize, DerivesStiffnessFromMaterialsAndFreeLengthsFromPoses) {
+  // The Hertz cylinder stiffness of the Flores joint, K = 6.610e10 N/m^1.5 for steel, R_B = 10 mm,
+  // R_J = 9.5 mm (docs/architecture.md), computed by finalize, not by the loader.
+  Model m = load_model_file(example_path("flores_slider_crank.yaml")).model;
+  const Joint& j = m.joints[2];
+  ASSERT_TRUE(j.clearance);
+  EXPECT_NEAR(j.clearance->contact.stiffness / 6.610e10, 1.0, 1e-3);
+}
+
+}  // namespace
+}  // namespace lash::test
