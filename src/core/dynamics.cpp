@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "core/elements/clearance_revolute.hpp"
+#include "core/elements/constraint_rows.hpp"
 #include "core/elements/registry.hpp"
 
 namespace lash {
@@ -22,7 +23,7 @@ void build_constraints(const Model& model, Workspace& ws, double t, const double
     // The workspace's Φ_q: only the blocks of the bodies each row touches were ever written.
     for (int i = 0; i < ws.m; ++i)
       for (int b : ws.row_bodies[i])
-        if (b >= 0) phi_q.row(i).segment(ws.blocks[b].offset, ws.blocks[b].size).setZero();
+        if (b >= 0) for_block(ws.blocks[b], [&](int k) { phi_q(i, k) = 0.0; });
   } else {
     phi_q.setZero();
   }
@@ -279,11 +280,10 @@ bool evaluate(const Model& model, Workspace& ws, double t, const double* y, doub
       double pq = 0.0, rate = 0.0;
       for (int bi : ws.row_bodies[i]) {
         if (bi < 0) continue;
-        const BodyBlock& bl = ws.blocks[bi];
-        for (int k = bl.offset; k < bl.offset + bl.size; ++k) {
+        for_block(ws.blocks[bi], [&](int k) {
           pq += ws.phi_q(i, k) * ws.qdd[k];
           rate += ws.phi_q(i, k) * qd[k];
-        }
+        });
       }
       ws.rhs_m[i] = ws.gamma[i] - 2.0 * a * ws.phi_dot[i] - b * b * ws.phi[i] - pq;
       ws.rate_m[i] = rate;
@@ -291,9 +291,8 @@ bool evaluate(const Model& model, Workspace& ws, double t, const double* y, doub
         double sum = 0.0;
         for (int bi : ws.row_bodies[i]) {
           if (bi < 0 || (bi != ws.row_bodies[j][0] && bi != ws.row_bodies[j][1])) continue;
-          const BodyBlock& bl = ws.blocks[bi];
-          for (int k = bl.offset; k < bl.offset + bl.size; ++k)
-            sum += ws.phi_q(i, k) * ws.minv[k] * ws.phi_q(j, k);
+          for_block(ws.blocks[bi],
+                    [&](int k) { sum += ws.phi_q(i, k) * ws.minv[k] * ws.phi_q(j, k); });
         }
         ws.w(i, j) = sum;
       }
@@ -302,9 +301,7 @@ bool evaluate(const Model& model, Workspace& ws, double t, const double* y, doub
     for (int i = 0; i < m; ++i)
       for (int bi : ws.row_bodies[i]) {
         if (bi < 0) continue;
-        const BodyBlock& bl = ws.blocks[bi];
-        for (int k = bl.offset; k < bl.offset + bl.size; ++k)
-          ws.g[k] += ws.phi_q(i, k) * ws.lambda[i];
+        for_block(ws.blocks[bi], [&](int k) { ws.g[k] += ws.phi_q(i, k) * ws.lambda[i]; });
       }
     ws.qdd = ws.minv.cwiseProduct(ws.g);
     // Power of all constraint forces: the drivers' work (and Baumgarte's, ≈ 0).

@@ -17,6 +17,16 @@ struct BodyBlock {
   int rot = -1;
 };
 
+/// Calls f(k) for every coordinate index k of a block, unrolled for the rigid body's 3.
+template <typename F>
+inline void for_block(const BodyBlock& bl, F&& f) {
+  if (bl.size == 3) {
+    f(bl.offset), f(bl.offset + 1), f(bl.offset + 2);
+  } else {
+    for (int k = bl.offset; k < bl.offset + bl.size; ++k) f(k);
+  }
+}
+
 /// Pose and velocity of one body at the current evaluation (the ground: all zero, A = I).
 struct BodyKin {
   Vec2 r = Vec2::Zero(), v = Vec2::Zero();

@@ -6,7 +6,7 @@
 //   body's own joints may have clearance.
 // Profiles: constant speed f = ωt; position f = expression(t); speed ḟ = expression(t), whose
 // integral f is the auxiliary state p (ṗ = ḟ), so f and ḟ are exact.
-#include "core/elements/registry.hpp"
+#include "core/elements/constraint_rows.hpp"
 
 namespace lash {
 

@@ -1,5 +1,5 @@
 // Fixed joint (weld): r_a = r_b and φ_b − φ_a = angle0, 3 rows.
-#include "core/elements/registry.hpp"
+#include "core/elements/constraint_rows.hpp"
 
 namespace lash::fixed_joint {
 namespace {

@@ -122,16 +122,7 @@ inline const SensorKind& kind_of(const Sensor& s) {
   return *kSensorKinds[static_cast<int>(s.type)];
 }
 
-// --- constraint rows shared by several kinds (constraint_rows.cpp) -------------------------
-/// Φ = r_a − r_b (2 rows).
-void revolute_rows(const Workspace& ws, const PointRef& a, const PointRef& b, int row,
-                   ConstraintOut& out);
-/// Φ = φ_b − φ_a − angle0 − f (1 row).
-void angle_row(const Workspace& ws, int body_a, int body_b, double angle0, double f, double fd,
-               double fdd, int row, ConstraintOut& out);
-/// Φ = (A_a v')·(r_b − r_a) − f with v' fixed in body a (1 row).
-void dot_row(const Workspace& ws, const PointRef& a, const PointRef& b, const Vec2& v_body,
-             double f, double fd, double fdd, int row, ConstraintOut& out);
+// Constraint rows shared by several kinds: core/elements/constraint_rows.hpp.
 
 // --- drivers (driver.cpp) ------------------------------------------------------------------
 void driver_constrain(const Model&, const Workspace&, int d, double t, const double* y, int row,

@@ -1,6 +1,6 @@
 // Revolute joint (ideal pin): r_a = r_b, 2 rows. Its multipliers are the force on body a
 // (the journal's) from body b.
-#include "core/elements/registry.hpp"
+#include "core/elements/constraint_rows.hpp"
 
 namespace lash::revolute {
 namespace {

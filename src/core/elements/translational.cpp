@@ -1,7 +1,7 @@
 // Translational joint (prismatic): body b slides along `axis` fixed in body a. Rows: relative
 // angle locked (omitted when the slider is a point mass, which has no angle) and
 // perp(A_a axis)·(r_b − r_a) = 0.
-#include "core/elements/registry.hpp"
+#include "core/elements/constraint_rows.hpp"
 
 namespace lash::translational {
 namespace {

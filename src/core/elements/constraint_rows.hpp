@@ -1,10 +1,14 @@
-// Constraint rows shared by joint and driver kinds: coincident points, relative angle, and a
-// point's distance along a body-fixed direction (Nikravesh 1988, §4.4 and §11.2).
+#pragma once
+/// @file constraint_rows.hpp
+/// Constraint rows shared by joint and driver kinds: coincident points, relative angle, and a
+/// point's distance along a body-fixed direction (Nikravesh 1988, §4.4 and §11.2). Inline: they
+/// are the inner loop of every right-hand side.
 #include "core/elements/registry.hpp"
 
 namespace lash {
 
-void revolute_rows(const Workspace& ws, const PointRef& a, const PointRef& b, int row,
+/// Φ = r_a − r_b (2 rows).
+inline void revolute_rows(const Workspace& ws, const PointRef& a, const PointRef& b, int row,
                    ConstraintOut& out) {
   const BodyKin &ka = ws.kin_of(a.body), &kb = ws.kin_of(b.body);
   const PointKin pa = point_kin(ka, a.s), pb = point_kin(kb, b.s);
@@ -19,7 +23,8 @@ void revolute_rows(const Workspace& ws, const PointRef& a, const PointRef& b, in
     out.gamma->segment<2>(row) = pa.s * ka.omega * ka.omega - pb.s * kb.omega * kb.omega;
 }
 
-void angle_row(const Workspace& ws, int body_a, int body_b, double angle0, double f, double fd,
+/// Φ = φ_b − φ_a − angle0 − f (1 row).
+inline void angle_row(const Workspace& ws, int body_a, int body_b, double angle0, double f, double fd,
                double fdd, int row, ConstraintOut& out) {
   const BodyKin &ka = ws.kin_of(body_a), &kb = ws.kin_of(body_b);
   out.phi[row] = kb.phi - ka.phi - angle0 - f;
@@ -29,7 +34,8 @@ void angle_row(const Workspace& ws, int body_a, int body_b, double angle0, doubl
   if (out.gamma) (*out.gamma)[row] = fdd;
 }
 
-void dot_row(const Workspace& ws, const PointRef& a, const PointRef& b, const Vec2& v_body,
+/// Φ = (A_a v')·(r_b − r_a) − f with v' fixed in body a (1 row).
+inline void dot_row(const Workspace& ws, const PointRef& a, const PointRef& b, const Vec2& v_body,
              double f, double fd, double fdd, int row, ConstraintOut& out) {
   const BodyKin &ka = ws.kin_of(a.body), &kb = ws.kin_of(b.body);
   const PointKin pa = point_kin(ka, a.s), pb = point_kin(kb, b.s);
