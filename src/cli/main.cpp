@@ -171,7 +171,7 @@ int main(int argc, char** argv) {
     std::cout << model_path << ": ok: " << model.bodies.size() << " bodies, "
               << model.joints.size() << " joints (" << model.clearance_joint_count()
               << " with clearance), " << model.drivers.size() << " drivers, "
-              << model.loads.size() << " loads\n";
+              << model.loads.size() << " loads, " << model.sensors.size() << " sensors\n";
     return 0;
   }
 
