@@ -1,5 +1,6 @@
-// A run with its analyses (io/report.cpp): periodic and period-2 responses are recognised, and
-// the report data of the Flores example is complete and consistent.
+// The report of a run with its analyses (io/report.cpp): report_data.json follows
+// docs/report-data.md (the Flores example complete and consistent, the ideal slider-crank's
+// sections and verdict, rounding and nulls), and report.html embeds it safely.
 #include <cmath>
 
 #include <unistd.h>
@@ -11,91 +12,93 @@
 
 using namespace lash;
 using namespace lash::test;
+using nlohmann::json;
 
 namespace {
-ReportRun analyse(const std::string& yaml, const std::vector<std::string>& overrides = {},
-                  ReportOptions o = {}) {
-  const LoadedModel lm = load_model_text(yaml, "t.yaml", overrides);
-  return run_with_analysis(lm, o, nullptr);
+struct Report {
+  Model model;
+  RunAnalysis run;
+  json data;
+};
+
+Report report(const std::string& yaml, const std::vector<std::string>& overrides = {},
+              AnalysisOptions o = {}) {
+  Report r;
+  r.model = load_model_text(yaml, "t.yaml", overrides).model;
+  r.run = analyze_run(r.model, o);
+  r.data = report_data(r.model, r.run);
+  return r;
+}
+
+/// Six significant digits, as the document rounds its series.
+double six_digits(double v) {
+  if (v == 0.0) return 0.0;
+  const double scale = std::pow(10.0, 5 - static_cast<int>(std::floor(std::log10(std::abs(v)))));
+  return std::round(v * scale) / scale;
 }
 }  // namespace
 
-TEST(Report, IdealSliderCrankIsPeriodicWithOnePoincarePoint) {
-  const ReportRun r = analyse(read_file(example_path("flores_slider_crank_ideal.yaml")),
-                              {"solver.end_time=0.12", "solver.output_interval=1e-4"});
-  ASSERT_TRUE(r.result.status.ok);
+TEST(Report, IdealSliderCrankSectionsAndVerdict) {
+  const Report r = report(read_file(example_path("flores_slider_crank_ideal.yaml")),
+                          {"solver.end_time=0.12", "solver.output_interval=1e-4"});
+  ASSERT_TRUE(r.data["status"]["ok"].get<bool>());
   const auto& p = r.data["analysis"]["poincare"];
   EXPECT_EQ(p["kind"], "stroboscopic");
+  EXPECT_TRUE(p["plane"].is_null());
   EXPECT_NEAR(p["period"].get<double>(), 0.012, 1e-12);
   EXPECT_EQ(p["points"].size(), 10u);  // sections at 0.012, 0.024, …, 0.12 (t = 0 is transient)
+  EXPECT_EQ(p["times"].size(), 10u);
   EXPECT_EQ(p["distinct"].get<int>(), 1);
+  EXPECT_EQ(p["variables"], json({"crank.x", "crank.y"}));  // no clearance joint: body poses
+  for (const auto& x : p["points"]) EXPECT_EQ(x.size(), 2u);
   EXPECT_EQ(r.data["analysis"]["verdict"]["class"], "periodic");
+  EXPECT_EQ(r.data["analysis"]["verdict"]["evidence"], json(r.run.verdict.evidence));
+  // No clearance joint: no twin.
+  EXPECT_TRUE(r.data["series"]["ideal"].is_null());
+  EXPECT_TRUE(r.data["analysis"]["comparison"].is_null());
+  EXPECT_TRUE(r.data["analysis"]["clearance"].empty());
   // The driver fixes every coordinate: there is no free direction, so no exponent.
   const auto& ly = r.data["analysis"]["lyapunov"];
   EXPECT_TRUE(ly["exponent"].is_null());
+  EXPECT_EQ(ly["renormalisations"], 0);
+  EXPECT_TRUE(ly["history"].empty());
   EXPECT_NE(ly["message"].get<std::string>().find("no free degree of freedom"), std::string::npos) << ly["message"];
 }
 
-TEST(Report, SubharmonicResponseGivesTwoPoincarePoints) {
-  // A flywheel turning at ω sets the period T = 2π/ω; a mass on a spring tuned to ω/2 moves
-  // x = x0 cos(ωt/2): sampled every T it alternates between +x0 and −x0: a period-2 orbit.
-  const double w = 100.0, m = 1.0, k = m * (w / 2) * (w / 2);
-  const std::string yaml = R"Y(
-bodies:
-  wheel: {mass: 1, inertia: 0.01}
-  block: {mass: 1.0, inertia: 0.01, position: [0.01, 1]}
-ground: {markers: {O: [0, 0], R: [0, 1]}}
-joints:
-  axle: {type: revolute, journal: wheel, bearing: ground.O}
-  rail: {type: translational, guide: ground.R, slider: block, axis: [1, 0]}
-drivers:
-  motor: {joint: axle, speed: )Y" + std::to_string(w) + R"Y(}
-loads:
-  spring: {type: spring_damper, from: ground.R, to: block, stiffness: )Y" + std::to_string(k) +
-                           R"Y(, free_length: 0}
-solver: {rtol: 1e-10, atol: 1e-13, end_time: 1.3, output_interval: 1e-3, initial_state: given}
-)Y";
-  ReportOptions o;
-  o.lyapunov = false;
-  const ReportRun r = analyse(yaml, {}, o);
-  ASSERT_TRUE(r.result.status.ok) << r.result.status.message;
-  const auto& p = r.data["analysis"]["poincare"];
-  EXPECT_GE(p["points"].size(), 18u);
-  EXPECT_EQ(p["distinct"].get<int>(), 2);
-  EXPECT_EQ(r.data["analysis"]["verdict"]["class"], "periodic");
-
-  // Event-based: the block's velocity falling through zero happens at its largest x, once per
-  // oscillation (2T): the same state every time, one distinct point.
-  o.section_planes = {"block.vx=0,down"};
-  const ReportRun e = analyse(yaml, {}, o);
-  const auto& pe = e.data["analysis"]["poincare"];
-  EXPECT_EQ(pe["kind"], "event");
-  const double t_osc = 4 * M_PI / w;  // 0.1257 s; sections after the 1-period transient
-  EXPECT_NEAR(static_cast<double>(pe["points"].size()), std::floor((1.3 - 2 * M_PI / w) / t_osc), 1.0);
-  EXPECT_EQ(pe["distinct"].get<int>(), 1);
-  for (const auto& p : pe["points"]) EXPECT_NEAR(p[0].get<double>(), 0.0, 1e-9);  // wheel x
-  // Bad planes are reported.
-  o.section_planes = {"block.speed=0"};
-  EXPECT_THROW(analyse(yaml, {}, o), std::invalid_argument);
-}
-
 TEST(Report, FloresExampleDataIsCompleteAndConsistent) {
-  ReportOptions o;
-  const ReportRun r = analyse(read_file(example_path("flores_slider_crank.yaml")), {}, o);
-  ASSERT_TRUE(r.result.status.ok);
+  const Report r = report(read_file(example_path("flores_slider_crank.yaml")));
+  ASSERT_TRUE(r.run.result.status.ok);
   const auto& d = r.data;
-  for (const char* key : {"model", "status", "integrator", "series", "frames", "analysis"})
+  for (const char* key : {"version", "model", "status", "integrator", "max_constraint_violation",
+                          "channel_info", "series", "frames", "analysis"})
     EXPECT_TRUE(d.contains(key)) << key;
+  for (const char* key : {"statistics", "comparison", "clearance", "poincare", "spectra", "phase",
+                          "lyapunov", "verdict"})
+    EXPECT_TRUE(d["analysis"].contains(key)) << key;
   const size_t n = d["series"]["time"].size();
   EXPECT_GT(n, 1000u);
   EXPECT_LE(n, 4002u);
   EXPECT_EQ(d["series"]["channels"]["slider.ax"].size(), n);
   EXPECT_EQ(d["series"]["ideal"]["slider.ax"].size(), n);
   EXPECT_EQ(d["series"]["crank_angle"].size(), n);
+  // Every channel with its unit and description; the twin's only where the run has them too.
+  EXPECT_EQ(d["series"]["channels"].size(), r.run.series.channels.size());
+  EXPECT_EQ(d["channel_info"].size(), r.run.series.channels.size());
+  EXPECT_EQ(d["channel_info"]["slider.ax"]["unit"], "m/s²");
+  for (const auto& [name, v] : d["series"]["ideal"].items())
+    EXPECT_TRUE(d["series"]["channels"].contains(name)) << name;
+  // Series are the typed ones rounded to six significant digits.
+  const auto& ax = r.run.series.values[r.run.series.index("slider.ax")];
+  for (size_t k = 0; k < n; ++k) {
+    ASSERT_EQ(d["series"]["channels"]["slider.ax"][k].get<double>(), six_digits(ax[k])) << k;
+    ASSERT_EQ(d["series"]["time"][k].get<double>(), six_digits(r.run.series.time[k])) << k;
+  }
   // Min/max decimation keeps the impact spikes: the decimated peak is the true peak.
   double peak = 0;
   for (double v : d["series"]["channels"]["slider.ax"]) peak = std::max(peak, std::abs(v));
   EXPECT_NEAR(peak, d["analysis"]["statistics"]["slider.ax"]["peak"].get<double>(), 1e-5 * peak);  // 6 digits
+  EXPECT_TRUE(d["analysis"]["statistics"]["slider.ax"]["angle_range"].is_null());
+  EXPECT_EQ(d["analysis"]["statistics"]["slider.ax"]["window"], json({0.0, 0.024}));
   // Clearance makes the slider acceleration peak larger than the ideal mechanism's 19.4 km/s².
   const auto& cmp = d["analysis"]["comparison"]["slider.ax"];
   EXPECT_NEAR(cmp["ideal_peak"].get<double>(), 19419, 30);
@@ -106,6 +109,11 @@ TEST(Report, FloresExampleDataIsCompleteAndConsistent) {
   EXPECT_NEAR(m["free_flight_share"].get<double>() + m["impact_share"].get<double>() +
                   m["continuous_share"].get<double>(), 1.0, 1e-12);
   EXPECT_EQ(m["impacts"].get<int>(), static_cast<int>(cj["impact_velocities"].size()));
+  EXPECT_EQ(m["episodes"].size(), r.run.clearance[0].modes.episodes.size());
+  for (const auto& e : m["episodes"]) {
+    ASSERT_EQ(e.size(), 3u);
+    EXPECT_TRUE(e[2] == "impact" || e[2] == "continuous") << e;
+  }
   int counted = 0;
   for (int c : cj["histogram"]["counts"]) counted += c;
   EXPECT_EQ(counted, m["impacts"].get<int>());
@@ -114,45 +122,75 @@ TEST(Report, FloresExampleDataIsCompleteAndConsistent) {
     ASSERT_LT(std::hypot(cj["orbit"]["ex"][i].get<double>(), cj["orbit"]["ey"][i].get<double>()),
               0.5e-3 + 1e-4);
   EXPECT_TRUE(d["analysis"]["spectra"].contains("slider.ax"));
+  EXPECT_EQ(d["analysis"]["spectra"]["slider.ax"]["window"], "hann");
   EXPECT_FALSE(d["analysis"]["verdict"]["class"].get<std::string>().empty());
   EXPECT_FALSE(d["analysis"]["verdict"]["evidence"].empty());
   EXPECT_EQ(d["frames"]["bodies"]["crank"].size(), d["frames"]["time"].size());
+  EXPECT_EQ(d["frames"]["clearance"]["rod_slider"].size(), d["frames"]["time"].size());
+  // Default phase portraits: the joint's ex–ey and δ–δ̇, all of them channels.
+  EXPECT_EQ(d["analysis"]["phase"], json::parse(R"([{"x": "rod_slider.ex", "y": "rod_slider.ey"},
+                                                    {"x": "rod_slider.delta", "y": "rod_slider.delta_dot"}])"));
 }
 
-TEST(Report, StatisticsOverACrankAngleRange) {
-  // The ideal slider's acceleration over a crank-angle window against the closed form
-  // a(θ) = −rω²(cos θ + (r/l) cos 2θ / √(1 − (r/l)² sin² θ) + ...) evaluated on a fine grid: at
-  // top dead centre (350°…10°) the extreme is the −19 419 m/s² of mechanisms.md; near bottom dead
-  // centre (170°…190°) r/l = 0.42 > 1/4 splits the maximum off 180° (8 089 m/s² > 7 996 m/s²).
-  const double r = 0.05, l = 0.12, w = 5000 * 2 * M_PI / 60;
-  auto ax = [&](double th) {
-    const double s = std::sin(th), c = std::cos(th);
-    const double root = std::sqrt(l * l - r * r * s * s), u = r * r * s * c;
-    return -r * c * w * w - r * r * std::cos(2 * th) * w * w / root - u * u * w * w / (root * root * root);
-  };
-  auto extreme = [&](double a0, double a1, bool want_max) {
-    double e = want_max ? -1e300 : 1e300;
-    for (double a = a0; a <= a1; a += 0.001) {
-      const double v = ax(a * M_PI / 180);
-      e = want_max ? std::max(e, v) : std::min(e, v);
-    }
-    return e;
-  };
-  ReportOptions o;
-  o.lyapunov = false;
-  o.stats_angle0 = 350;
-  o.stats_angle1 = 10;
-  const std::string yaml = read_file(example_path("flores_slider_crank_ideal.yaml"));
-  const ReportRun top = analyse(yaml, {"solver.output_interval=1e-6"}, o);
-  EXPECT_NEAR(top.data["analysis"]["statistics"]["slider.ax"]["min"].get<double>(),
-              extreme(-10, 10, false), 1.0);
-  EXPECT_NEAR(extreme(-10, 10, false), -19419, 1.0);
-  o.stats_angle0 = 170;
-  o.stats_angle1 = 190;
-  const ReportRun bottom = analyse(yaml, {"solver.output_interval=1e-6"}, o);
-  const auto& st = bottom.data["analysis"]["statistics"]["slider.ax"];
-  EXPECT_NEAR(st["max"].get<double>(), extreme(170, 190, true), 1.0);
-  EXPECT_NEAR(st["min"].get<double>(), extreme(170, 190, false), 1.0);
+TEST(Report, RoundingAndWhatIsMissing) {
+  // A hand-made result: the document rounds series to six digits, keeps statistics exact, and
+  // writes null for what was not computed.
+  const Model model =
+      load_model_text(read_file(example_path("flores_slider_crank_ideal.yaml")), "t.yaml", {}).model;
+  RunAnalysis a;
+  a.result.status.ok = false;
+  a.result.status.t = 0.5;
+  a.result.status.element = "crank_pivot";
+  a.result.status.message = "stopped";
+  a.series.time = {0.0, 1.0 / 3.0};
+  a.series.channels = {{"slider.ax", "m/s²", "acceleration"}};
+  a.series.values = {{1.23456789, -987654.321}};
+  ChannelStatistics st;
+  st.channel = "slider.ax";
+  st.min = -987654.321;
+  st.max = 1.23456789;
+  st.t0 = 0.0;
+  st.t1 = 0.5;
+  st.angle0_deg = 350;
+  st.angle1_deg = 10;
+  a.statistics = {st};
+  LyapunovEstimate l;
+  l.estimated = true;
+  l.ok = false;
+  l.renormalisations = 3;
+  l.interval = 1e-3;
+  l.d0 = 1e-7;
+  l.history = {{0.0123456789, 42.4242424}};
+  l.message = "a trajectory failed";
+  a.lyapunov = l;
+  a.verdict.kind = "undetermined";
+  const json d = report_data(model, a);
+  EXPECT_EQ(d["version"], 1);
+  EXPECT_EQ(d["model"]["name"], model.name);
+  EXPECT_EQ(d["status"], json({{"ok", false}, {"time", 0.5}, {"element", "crank_pivot"},
+                               {"message", "stopped"}}));
+  EXPECT_EQ(d["series"]["time"], json({0.0, 0.333333}));
+  EXPECT_EQ(d["series"]["channels"]["slider.ax"], json({1.23457, -987654.0}));
+  EXPECT_EQ(d["channel_info"]["slider.ax"], json({{"unit", "m/s²"}, {"description", "acceleration"}}));
+  EXPECT_TRUE(d["series"]["crank_angle"].is_null());
+  EXPECT_TRUE(d["series"]["ideal"].is_null());
+  EXPECT_EQ(d["analysis"]["statistics"]["slider.ax"]["min"], -987654.321);
+  EXPECT_EQ(d["analysis"]["statistics"]["slider.ax"]["angle_range"], json({350.0, 10.0}));
+  EXPECT_EQ(d["analysis"]["statistics"]["slider.ax"]["window"], json({0.0, 0.5}));
+  EXPECT_TRUE(d["analysis"]["comparison"].is_null());
+  EXPECT_TRUE(d["analysis"]["poincare"].is_null());
+  EXPECT_TRUE(d["analysis"]["spectra"].empty());
+  EXPECT_TRUE(d["analysis"]["phase"].empty());
+  // A failed estimate keeps its inputs and history but gives no exponent.
+  const auto& ly = d["analysis"]["lyapunov"];
+  EXPECT_TRUE(ly["exponent"].is_null());
+  EXPECT_EQ(ly["renormalisations"], 3);
+  EXPECT_EQ(ly["interval"], 1e-3);
+  EXPECT_EQ(ly["d0"], 1e-7);
+  EXPECT_EQ(ly["history"], json({{0.0123457, 42.4242}}));
+  EXPECT_EQ(ly["message"], "a trajectory failed");
+  a.lyapunov.reset();
+  EXPECT_TRUE(report_data(model, a)["analysis"]["lyapunov"].is_null());
 }
 
 TEST(Report, PageEmbedsTheDataSafely) {

@@ -15,6 +15,7 @@
 #include "io/report.hpp"
 #include "io/results_writer.hpp"
 #include "io/state_file.hpp"
+#include "study/run_analysis.hpp"
 
 namespace {
 
@@ -176,7 +177,7 @@ int main(int argc, char** argv) {
   }
 
   if (*report || *analyze) {
-    lash::ReportOptions ro;
+    lash::AnalysisOptions ro;
     ro.discard_periods = discard_periods;
     if (window.size() == 2) ro.stats_t0 = window[0], ro.stats_t1 = window[1];
     if (angle_range.size() == 2) ro.stats_angle0 = angle_range[0], ro.stats_angle1 = angle_range[1];
@@ -189,12 +190,13 @@ int main(int argc, char** argv) {
     }
     try {
       ProgressObserver progress(nullptr, isatty(STDERR_FILENO));
-      const lash::ReportRun rr = lash::run_with_analysis(loaded, ro, nullptr, &progress);
+      const lash::RunAnalysis ra = lash::analyze_run(model, ro, &progress);
+      const nlohmann::json data = lash::report_data(model, ra);
       if (*report) {
-        for (const auto& line : lash::write_report(rr.data, run_dir)) std::cout << line << "\n";
-        return rr.result.status.ok ? 0 : 1;
+        for (const auto& line : lash::write_report(data, run_dir)) std::cout << line << "\n";
+        return ra.result.status.ok ? 0 : 1;
       }
-      const auto& an = rr.data["analysis"];
+      const auto& an = data["analysis"];
       std::ofstream(run_dir + "/analysis.json") << an.dump(2) << "\n";
       if (an["poincare"].is_object())
         fmt::print("poincare ({}): {} sections, {} distinct point(s)\n",
@@ -220,7 +222,7 @@ int main(int argc, char** argv) {
       fmt::print("verdict: {}", an["verdict"]["class"].get<std::string>());
       for (const auto& e : an["verdict"]["evidence"]) fmt::print("; {}", e.get<std::string>());
       fmt::print("\nwrote {}/analysis.json\n", run_dir);
-      return rr.result.status.ok ? 0 : 1;
+      return ra.result.status.ok ? 0 : 1;
     } catch (const std::invalid_argument& e) {
       std::cerr << "error: " << e.what() << "\n";
       return 2;
@@ -258,12 +260,12 @@ int main(int argc, char** argv) {
     lash::Workspace ws(model);
     lash::ResultsWriter writer(model, out_dir);
     lash::RunResult result;
-    lash::ReportRun rr;
+    lash::RunAnalysis ra;
     try {
       if (with_report) {
-        ProgressObserver progress(nullptr, !quiet && isatty(STDERR_FILENO));
-        rr = lash::run_with_analysis(loaded, lash::ReportOptions{}, &writer, &progress);
-        result = rr.result;
+        ProgressObserver progress(&writer, !quiet && isatty(STDERR_FILENO));
+        ra = lash::analyze_run(model, lash::AnalysisOptions{}, &progress);
+        result = ra.result;
       } else {
         ProgressObserver observer(&writer, !quiet && isatty(STDERR_FILENO));
         result = lash::simulate(model, ws, observer, {}, {}, run_options);
@@ -276,7 +278,7 @@ int main(int argc, char** argv) {
 
     // The report covers what was computed, up to a failure too.
     std::vector<std::string> report_notes;
-    if (with_report) report_notes = lash::write_report(rr.data, out_dir);
+    if (with_report) report_notes = lash::write_report(lash::report_data(model, ra), out_dir);
     if (!result.status.ok) {
       for (const auto& line : report_notes) std::cerr << "report: " << line << "\n";
       std::cerr << "\nerror: simulation stopped at t = " << result.status.t << " s"

@@ -1,0 +1,199 @@
+#pragma once
+/// @file run_analysis.hpp
+/// A run with the analyses of a study: the model is simulated with an observer that gathers what
+/// the analyses need, beside it the ideal twin (every clearance joint made ideal) and, for the
+/// largest Lyapunov exponent, two trajectories restarted from constraint-projected states; the
+/// model-free math of src/analysis is applied to them. Results are plain typed structs in SI
+/// units with channel names, units and descriptions from `channel_info`; turning them into
+/// report_data.json (docs/report-data.md) is io's business (`io/report.hpp`).
+#include <array>
+#include <cmath>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "analysis/dynamics_analysis.hpp"
+#include "core/elements/registry.hpp"
+#include "core/math.hpp"
+#include "core/simulate.hpp"
+
+namespace lash {
+
+/// What to analyse and how finely to keep it.
+struct AnalysisOptions {
+  bool ideal_twin = true;           ///< run the model with every clearance joint ideal
+  bool lyapunov = true;             ///< estimate the largest Lyapunov exponent
+  double lyapunov_d0 = 0.0;         ///< separation, m (0: 2e-4 × the smallest clearance, ≤ 1e-7)
+  std::string poincare_driver;      ///< driver whose period sets the sections ("" = first rotary)
+  /// Event-based sections instead of stroboscopic ones: "<body>.<x|y|phi|vx|vy|omega>=V[,down]".
+  std::vector<std::string> section_planes;
+  int discard_periods = 1;          ///< transient periods skipped by sections, spectra, Lyapunov
+  std::vector<std::string> fft_channels;   ///< default: translational bodies' ax, each Fn
+  std::vector<std::pair<std::string, std::string>> phase;  ///< default: each joint's (ex, ey)
+  double continuous_contact_time = 0.0;    ///< s; 0: 10% of the period, or 1 ms without one
+  size_t display_points = 800;      ///< buckets for decimated series (2 points each)
+  size_t frames = 400;              ///< animation frames
+  size_t spectrum_points = 1000;    ///< buckets for decimated spectra (2 points each)
+  double stats_t0 = -1e300, stats_t1 = 1e300;  ///< statistics window (s)
+  /// Statistics only where the crank angle (deg, of the period driver) lies in [a0, a1],
+  /// wrapping through 360 when a0 > a1; NaN: everywhere.
+  double stats_angle0 = std::nan(""), stats_angle1 = std::nan("");
+};
+
+/// Channels on a shared, min/max-decimated time base: each bucket of outputs becomes two points
+/// (its first and last time) carrying each channel's extremes in time order, so impact spikes
+/// survive display.
+struct DecimatedSeries {
+  std::vector<double> time;               ///< s
+  std::vector<ChannelInfo> channels;      ///< name, unit, description of each column
+  std::vector<std::vector<double>> values;  ///< values[channel][sample], SI units
+  /// Index of the channel `name` in `channels`, or −1.
+  int index(const std::string& name) const;
+};
+
+/// One channel of the run against the same channel of the ideal twin, sample by sample.
+struct ChannelComparison {
+  std::string channel;
+  double rms_deviation = 0.0;   ///< sqrt(mean (v − v_ideal)²), channel units
+  double max_deviation = 0.0;   ///< max |v − v_ideal|
+  double ideal_peak = 0.0;      ///< max |v_ideal| over the whole twin run
+  double peak_ratio = 0.0;      ///< peak with clearance (statistics window) / ideal_peak; 0 if that is 0
+};
+
+/// The model with every clearance joint made ideal, run to completion.
+struct IdealTwin {
+  RunResult result;
+  /// The twin's channels, decimated with the main run's bucket size (its sample times are the
+  /// output grid, so they coincide with `RunAnalysis::series.time` while both runs complete).
+  DecimatedSeries series;
+  /// Channels of the main run that the twin has too, in the main run's column order.
+  std::vector<ChannelComparison> comparison;
+};
+
+/// min, max, peak, RMS and crest factor of one channel over the statistics window.
+struct ChannelStatistics {
+  std::string channel;
+  long samples = 0;
+  double min = 0.0, max = 0.0, peak = 0.0, rms = 0.0, crest = 0.0;
+  double t0 = 0.0, t1 = 0.0;    ///< the time window clipped to [0, end_time], s
+  /// The crank-angle range (deg) the statistics were restricted to; NaN: none.
+  double angle0_deg = std::nan(""), angle1_deg = std::nan("");
+};
+
+/// Histogram of a joint's impact velocities: `counts.size()` bins from 0 to the largest.
+struct ImpactHistogram {
+  std::vector<double> edges;    ///< m/s, counts.size() + 1 of them
+  std::vector<int> counts;
+};
+
+/// One clearance joint: its journal orbit and its contact modes.
+struct ClearanceJointAnalysis {
+  std::string joint;
+  double clearance = 0.0;               ///< m
+  std::vector<Vec2> orbit;              ///< eccentricity e = r_J − r_B, every k-th output, m
+  double continuous_contact_time = 0.0; ///< s: longer contact episodes are continuous contact
+  ModeSummary modes;                    ///< episodes, shares, impacts and their velocities δ̇⁻
+  ImpactHistogram histogram;
+};
+
+/// Poses for the animation, every k-th output.
+struct AnimationFrames {
+  std::vector<double> time;                              ///< s
+  std::vector<std::string> bodies;                       ///< body names (ground excluded)
+  std::vector<std::vector<std::array<double, 3>>> pose;  ///< pose[body][frame] = x, y (m), φ (rad)
+  std::vector<std::string> clearance_joints;             ///< clearance joint names
+  std::vector<std::vector<Vec2>> eccentricity;           ///< eccentricity[joint][frame], m
+};
+
+/// Poincaré sections after the transient: stroboscopic (once per driver period) or event-based
+/// (a plane in state space, located by the integrator's root finding).
+struct PoincareSections {
+  std::string kind;                       ///< "stroboscopic" or "event"
+  std::vector<std::string> planes;        ///< the plane specifications (event sections)
+  double period = 0.0;                    ///< s, 0 without a period driver
+  int discarded_periods = 0;
+  /// Each section point: (ex, ey) of every clearance joint, m; without a clearance joint each
+  /// body's x, y (m) and 1 cm × (cos φ, sin φ).
+  std::vector<std::vector<double>> points;
+  std::vector<double> times;              ///< s, one per point
+  std::vector<std::string> variables;     ///< channel names of the first two coordinates
+  int distinct = 0;                       ///< distinct points (count_distinct) within `tolerance`
+  double tolerance = 0.0;                 ///< m: 1% of the smallest clearance, 1 µm without one
+};
+
+/// Amplitude spectrum of one channel after the transient, decimated for display.
+struct ChannelSpectrum {
+  std::string channel;
+  std::vector<double> frequency;   ///< Hz
+  std::vector<double> amplitude;   ///< channel units
+  std::string window;              ///< "hann"
+  double discarded_time = 0.0;     ///< s of transient left out
+};
+
+/// A pair of channels to plot against each other.
+struct PhasePortrait {
+  std::string x, y;
+};
+
+/// The largest Lyapunov exponent by two trajectories (analysis/dynamics_analysis.hpp), with its
+/// inputs.
+struct LyapunovEstimate {
+  /// False when the drivers fix every coordinate: no free direction, nothing was run (`message`
+  /// says so); the fields below are then unset.
+  bool estimated = false;
+  bool ok = false;                 ///< the estimate completed; `exponent` is valid
+  double exponent = std::nan("");  ///< 1/s
+  int renormalisations = 0;
+  double interval = 0.0;           ///< s between renormalisations (period / 20)
+  int intervals = 0;               ///< renormalisation intervals asked for
+  double d0 = 0.0;                 ///< separation in configuration space, m and rad
+  double t0 = 0.0;                 ///< start: the first section after the transient, s
+  std::vector<std::pair<double, double>> history;  ///< (time s, running estimate 1/s)
+  std::string message;
+};
+
+/// periodic / quasi-periodic / chaotic / undetermined, and what it rests on.
+struct MotionVerdict {
+  std::string kind;
+  std::vector<std::string> evidence;
+  double lyapunov_exponent = std::nan("");  ///< 1/s, NaN when not estimated
+  double period = 0.0;                      ///< s, 0 without a period driver
+  int distinct_points = 0;                  ///< distinct Poincaré points
+  int sections = 0;                         ///< Poincaré sections taken
+  int off_harmonic_peaks = -1;              ///< strong spectral peaks off the harmonics; −1: not computed
+};
+
+/// Everything a run with its analyses produced.
+struct RunAnalysis {
+  RunResult result;                    ///< the main run
+  std::string period_driver;           ///< the driver whose period is used ("" none)
+  double period = 0.0;                 ///< s, 2π/|ω| of that driver, 0 without one
+  DecimatedSeries series;              ///< every channel of the main run
+  std::vector<double> crank_angle_deg; ///< the period driver's angle in [0, 360) at series.time; empty without one
+  std::optional<IdealTwin> ideal_twin; ///< absent if not asked for, no clearance joint, or the twin failed
+  AnimationFrames frames;
+  std::vector<ChannelStatistics> statistics;  ///< channels with samples in the window, column order
+  std::vector<ClearanceJointAnalysis> clearance;
+  std::optional<PoincareSections> poincare;   ///< absent without a period driver or a plane
+  std::vector<ChannelSpectrum> spectra;       ///< channels with at least 16 samples after the transient
+  std::vector<PhasePortrait> phase;
+  std::optional<LyapunovEstimate> lyapunov;   ///< absent if not asked for or not possible (no period, failed or short run)
+  MotionVerdict verdict;
+};
+
+/// The driver that sets the period: the constant-speed rotary driver named `name`, else (name
+/// empty) the first one; nullptr if there is none (or `name` is not one).
+const Driver* period_driver(const Model& model, const std::string& name);
+
+/// `model` with every clearance joint made ideal.
+Model ideal_model(const Model& model);
+
+/// Runs `model` with the analyses. `extra`, when given, also observes the main run (outputs,
+/// events, progress): a results writer, a progress line. Throws std::invalid_argument for an
+/// option naming what does not exist (driver, channel, plane), std::runtime_error if no initial
+/// state exists.
+RunAnalysis analyze_run(const Model& model, const AnalysisOptions& options,
+                        Observer* extra = nullptr);
+
+}  // namespace lash

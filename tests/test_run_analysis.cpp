@@ -1,0 +1,353 @@
+// A run with its analyses (study/run_analysis.cpp), read as typed results: periodic and period-2
+// responses are recognised, the Flores example's results are complete and consistent, statistics
+// over a crank-angle range match the closed form, the Lyapunov estimate carries its inputs, and
+// an extra observer sees exactly the main run.
+#include <cmath>
+
+#include "study/run_analysis.hpp"
+#include "test_support.hpp"
+
+using namespace lash;
+using namespace lash::test;
+
+namespace {
+struct Analysed {
+  Model model;
+  RunAnalysis run;
+};
+
+Analysed analyse(const std::string& yaml, const std::vector<std::string>& overrides = {},
+                 AnalysisOptions o = {}, Observer* extra = nullptr) {
+  Analysed a;
+  a.model = load_model_text(yaml, "t.yaml", overrides).model;
+  a.run = analyze_run(a.model, o, extra);
+  return a;
+}
+
+const ChannelStatistics& stat(const RunAnalysis& r, const std::string& channel) {
+  for (const auto& s : r.statistics)
+    if (s.channel == channel) return s;
+  throw std::runtime_error("no statistics for " + channel);
+}
+
+const std::vector<double>& values(const DecimatedSeries& s, const std::string& channel) {
+  const int i = s.index(channel);
+  if (i < 0) throw std::runtime_error("no channel " + channel);
+  return s.values[i];
+}
+
+const ChannelComparison& comparison(const RunAnalysis& r, const std::string& channel) {
+  for (const auto& c : r.ideal_twin.value().comparison)
+    if (c.channel == channel) return c;
+  throw std::runtime_error("no comparison for " + channel);
+}
+
+const std::string kSubharmonic(double w, double k) {
+  return R"Y(
+bodies:
+  wheel: {mass: 1, inertia: 0.01}
+  block: {mass: 1.0, inertia: 0.01, position: [0.01, 1]}
+ground: {markers: {O: [0, 0], R: [0, 1]}}
+joints:
+  axle: {type: revolute, journal: wheel, bearing: ground.O}
+  rail: {type: translational, guide: ground.R, slider: block, axis: [1, 0]}
+drivers:
+  motor: {joint: axle, speed: )Y" + std::to_string(w) + R"Y(}
+loads:
+  spring: {type: spring_damper, from: ground.R, to: block, stiffness: )Y" + std::to_string(k) +
+         R"Y(, free_length: 0}
+solver: {rtol: 1e-10, atol: 1e-13, end_time: 1.3, output_interval: 1e-3, initial_state: given}
+)Y";
+}
+}  // namespace
+
+TEST(RunAnalysis, IdealSliderCrankIsPeriodicWithOnePoincarePoint) {
+  const Analysed a = analyse(read_file(example_path("flores_slider_crank_ideal.yaml")),
+                             {"solver.end_time=0.12", "solver.output_interval=1e-4"});
+  const RunAnalysis& r = a.run;
+  ASSERT_TRUE(r.result.status.ok);
+  EXPECT_EQ(r.period_driver, "crank");
+  ASSERT_TRUE(r.poincare.has_value());
+  const PoincareSections& p = *r.poincare;
+  EXPECT_EQ(p.kind, "stroboscopic");
+  EXPECT_TRUE(p.planes.empty());
+  EXPECT_NEAR(p.period, 0.012, 1e-12);
+  EXPECT_EQ(p.points.size(), 10u);  // sections at 0.012, 0.024, …, 0.12 (t = 0 is transient)
+  ASSERT_EQ(p.times.size(), 10u);
+  for (size_t k = 0; k < p.times.size(); ++k) EXPECT_NEAR(p.times[k], 0.012 * (k + 1), 1e-9);
+  EXPECT_EQ(p.distinct, 1);
+  EXPECT_EQ(r.verdict.kind, "periodic");
+  EXPECT_EQ(r.verdict.distinct_points, 1);
+  EXPECT_EQ(r.verdict.sections, 10);
+  EXPECT_NEAR(r.verdict.period, 0.012, 1e-12);
+  // No clearance joint: no twin, no joint analysis.
+  EXPECT_FALSE(r.ideal_twin.has_value());
+  EXPECT_TRUE(r.clearance.empty());
+  // The driver fixes every coordinate: there is no free direction, so no exponent.
+  ASSERT_TRUE(r.lyapunov.has_value());
+  EXPECT_FALSE(r.lyapunov->estimated);
+  EXPECT_TRUE(std::isnan(r.lyapunov->exponent));
+  EXPECT_TRUE(std::isnan(r.verdict.lyapunov_exponent));
+  EXPECT_NE(r.lyapunov->message.find("no free degree of freedom"), std::string::npos) << r.lyapunov->message;
+}
+
+TEST(RunAnalysis, SubharmonicResponseGivesTwoPoincarePoints) {
+  // A flywheel turning at ω sets the period T = 2π/ω; a mass on a spring tuned to ω/2 moves
+  // x = x0 cos(ωt/2): sampled every T it alternates between +x0 and −x0: a period-2 orbit.
+  const double w = 100.0, m = 1.0, k = m * (w / 2) * (w / 2);
+  const std::string yaml = kSubharmonic(w, k);
+  AnalysisOptions o;
+  o.lyapunov = false;
+  const Analysed a = analyse(yaml, {}, o);
+  const RunAnalysis& r = a.run;
+  ASSERT_TRUE(r.result.status.ok) << r.result.status.message;
+  ASSERT_TRUE(r.poincare.has_value());
+  EXPECT_GE(r.poincare->points.size(), 18u);
+  EXPECT_EQ(r.poincare->distinct, 2);
+  EXPECT_EQ(r.verdict.kind, "periodic");
+  EXPECT_FALSE(r.lyapunov.has_value());  // not asked for
+
+  // Event-based: the block's velocity falling through zero happens at its largest x, once per
+  // oscillation (2T): the same state every time, one distinct point.
+  o.section_planes = {"block.vx=0,down"};
+  const Analysed e = analyse(yaml, {}, o);
+  ASSERT_TRUE(e.run.poincare.has_value());
+  const PoincareSections& pe = *e.run.poincare;
+  EXPECT_EQ(pe.kind, "event");
+  EXPECT_EQ(pe.planes, o.section_planes);
+  const double t_osc = 4 * M_PI / w;  // 0.1257 s; sections after the 1-period transient
+  EXPECT_NEAR(static_cast<double>(pe.points.size()), std::floor((1.3 - 2 * M_PI / w) / t_osc), 1.0);
+  EXPECT_EQ(pe.distinct, 1);
+  for (const auto& p : pe.points) EXPECT_NEAR(p[0], 0.0, 1e-9);  // wheel x
+  // Each section is one period of the block's oscillation after the previous one.
+  for (size_t i = 1; i < pe.times.size(); ++i) EXPECT_NEAR(pe.times[i] - pe.times[i - 1], t_osc, 1e-6);
+  // Bad planes are reported.
+  o.section_planes = {"block.speed=0"};
+  EXPECT_THROW(analyse(yaml, {}, o), std::invalid_argument);
+}
+
+TEST(RunAnalysis, FloresExampleResultsAreCompleteAndConsistent) {
+  const Analysed a = analyse(read_file(example_path("flores_slider_crank.yaml")));
+  const RunAnalysis& r = a.run;
+  ASSERT_TRUE(r.result.status.ok);
+  // Channel names, units and descriptions are the model's, in column order.
+  const std::vector<ChannelInfo> info = channel_info(a.model, Workspace(a.model));
+  ASSERT_EQ(r.series.channels.size(), info.size());
+  for (size_t i = 0; i < info.size(); ++i) {
+    EXPECT_EQ(r.series.channels[i].name, info[i].name);
+    EXPECT_EQ(r.series.channels[i].unit, info[i].unit);
+    EXPECT_EQ(r.series.channels[i].description, info[i].description);
+  }
+  EXPECT_EQ(r.series.channels[r.series.index("slider.ax")].unit, "m/s²");
+  EXPECT_EQ(r.series.index("slider.az"), -1);
+  const size_t n = r.series.time.size();
+  EXPECT_GT(n, 1000u);
+  EXPECT_LE(n, 4002u);
+  ASSERT_EQ(r.series.values.size(), info.size());
+  EXPECT_EQ(values(r.series, "slider.ax").size(), n);
+  ASSERT_TRUE(r.ideal_twin.has_value());
+  EXPECT_TRUE(r.ideal_twin->result.status.ok);
+  EXPECT_EQ(values(r.ideal_twin->series, "slider.ax").size(), n);
+  EXPECT_EQ(r.ideal_twin->series.time, r.series.time);  // the same time base
+  EXPECT_EQ(r.ideal_twin->series.index("rod_slider.Fn"), -1);  // the twin has no clearance joint
+  EXPECT_EQ(r.crank_angle_deg.size(), n);
+  for (double deg : r.crank_angle_deg) {
+    EXPECT_GE(deg, 0.0);
+    EXPECT_LT(deg, 360.0);
+  }
+  // Min/max decimation keeps the impact spikes: the decimated peak is the true peak.
+  double peak = 0;
+  for (double v : values(r.series, "slider.ax")) peak = std::max(peak, std::abs(v));
+  EXPECT_EQ(peak, stat(r, "slider.ax").peak);
+  // Clearance makes the slider acceleration peak larger than the ideal mechanism's 19.4 km/s².
+  const ChannelComparison& cmp = comparison(r, "slider.ax");
+  EXPECT_NEAR(cmp.ideal_peak, 19419, 30);
+  EXPECT_GT(cmp.peak_ratio, 1.0);
+  EXPECT_DOUBLE_EQ(cmp.peak_ratio, stat(r, "slider.ax").peak / cmp.ideal_peak);
+  EXPECT_GE(cmp.max_deviation, cmp.rms_deviation);
+  // Modes: shares add up, impacts match the onsets, the histogram counts every impact.
+  ASSERT_EQ(r.clearance.size(), 1u);
+  const ClearanceJointAnalysis& cj = r.clearance[0];
+  EXPECT_EQ(cj.joint, "rod_slider");
+  EXPECT_DOUBLE_EQ(cj.clearance, 0.5e-3);
+  const ModeSummary& m = cj.modes;
+  EXPECT_NEAR(m.free_flight_share + m.impact_share + m.continuous_share, 1.0, 1e-12);
+  EXPECT_EQ(m.impacts, static_cast<int>(m.impact_velocities.size()));
+  int counted = 0;
+  for (int c : cj.histogram.counts) counted += c;
+  EXPECT_EQ(counted, m.impacts);
+  EXPECT_EQ(cj.histogram.edges.size(), cj.histogram.counts.size() + 1);
+  // Episodes follow each other inside the run; the continuous ones are the long ones.
+  EXPECT_NEAR(cj.continuous_contact_time, 0.1 * r.period, 1e-15);
+  double last_end = 0.0;
+  for (const auto& e : m.episodes) {
+    EXPECT_GE(e.start, last_end);
+    EXPECT_GE(e.end, e.start);
+    EXPECT_LE(e.end, 0.024 + 1e-12);
+    EXPECT_EQ(e.continuous, e.end - e.start >= cj.continuous_contact_time);
+    last_end = e.end;
+  }
+  // The orbit stays within the clearance circle plus the penetration.
+  ASSERT_FALSE(cj.orbit.empty());
+  for (const Vec2& e : cj.orbit) ASSERT_LT(e.norm(), 0.5e-3 + 1e-4);
+  bool has_spectrum = false;
+  for (const auto& s : r.spectra) has_spectrum |= s.channel == "slider.ax";
+  EXPECT_TRUE(has_spectrum);
+  EXPECT_FALSE(r.verdict.kind.empty());
+  EXPECT_FALSE(r.verdict.evidence.empty());
+  // Frames: every body and clearance joint, one pose per frame time.
+  ASSERT_EQ(r.frames.bodies.size(), a.model.bodies.size());
+  EXPECT_EQ(r.frames.bodies[0], "crank");
+  EXPECT_EQ(r.frames.pose[0].size(), r.frames.time.size());
+  ASSERT_EQ(r.frames.clearance_joints, std::vector<std::string>{"rod_slider"});
+  EXPECT_EQ(r.frames.eccentricity[0].size(), r.frames.time.size());
+}
+
+TEST(RunAnalysis, StatisticsOverACrankAngleRange) {
+  // The ideal slider's acceleration over a crank-angle window against the closed form
+  // a(θ) = −rω²(cos θ + (r/l) cos 2θ / √(1 − (r/l)² sin² θ) + ...) evaluated on a fine grid: at
+  // top dead centre (350°…10°) the extreme is the −19 419 m/s² of mechanisms.md; near bottom dead
+  // centre (170°…190°) r/l = 0.42 > 1/4 splits the maximum off 180° (8 089 m/s² > 7 996 m/s²).
+  const double r = 0.05, l = 0.12, w = 5000 * 2 * M_PI / 60;
+  auto ax = [&](double th) {
+    const double s = std::sin(th), c = std::cos(th);
+    const double root = std::sqrt(l * l - r * r * s * s), u = r * r * s * c;
+    return -r * c * w * w - r * r * std::cos(2 * th) * w * w / root - u * u * w * w / (root * root * root);
+  };
+  auto extreme = [&](double a0, double a1, bool want_max) {
+    double e = want_max ? -1e300 : 1e300;
+    for (double a = a0; a <= a1; a += 0.001) {
+      const double v = ax(a * M_PI / 180);
+      e = want_max ? std::max(e, v) : std::min(e, v);
+    }
+    return e;
+  };
+  AnalysisOptions o;
+  o.lyapunov = false;
+  o.stats_angle0 = 350;
+  o.stats_angle1 = 10;
+  const std::string yaml = read_file(example_path("flores_slider_crank_ideal.yaml"));
+  const Analysed top = analyse(yaml, {"solver.output_interval=1e-6"}, o);
+  EXPECT_NEAR(stat(top.run, "slider.ax").min, extreme(-10, 10, false), 1.0);
+  EXPECT_NEAR(extreme(-10, 10, false), -19419, 1.0);
+  EXPECT_EQ(stat(top.run, "slider.ax").angle0_deg, 350);
+  EXPECT_EQ(stat(top.run, "slider.ax").angle1_deg, 10);
+  o.stats_angle0 = 170;
+  o.stats_angle1 = 190;
+  const Analysed bottom = analyse(yaml, {"solver.output_interval=1e-6"}, o);
+  const ChannelStatistics& st = stat(bottom.run, "slider.ax");
+  EXPECT_NEAR(st.max, extreme(170, 190, true), 1.0);
+  EXPECT_NEAR(st.min, extreme(170, 190, false), 1.0);
+  // 20° of each 360° revolution of the 0.024 s run, sampled every µs: 2 × 20/360 × 0.012 s.
+  EXPECT_NEAR(static_cast<double>(st.samples), 2 * 20.0 / 360 * 0.012 / 1e-6, 3);
+  EXPECT_EQ(st.t0, 0.0);
+  EXPECT_EQ(st.t1, 0.024);
+  // An angle range needs a driver to measure the angle by.
+  o.poincare_driver = "no_such_driver";
+  EXPECT_THROW(analyse(yaml, {}, o), std::invalid_argument);
+}
+
+TEST(RunAnalysis, LyapunovEstimateCarriesItsInputs) {
+  // Three revolutions of the Flores example: one discarded, two of estimate, 20 renormalisations
+  // each, from the first section after the transient.
+  const std::string yaml = read_file(example_path("flores_slider_crank.yaml"));
+  AnalysisOptions o;
+  o.ideal_twin = false;
+  const Analysed a = analyse(yaml, {"solver.end_time=0.036"}, o);
+  const RunAnalysis& r = a.run;
+  ASSERT_TRUE(r.result.status.ok);
+  ASSERT_TRUE(r.lyapunov.has_value());
+  const LyapunovEstimate& l = *r.lyapunov;
+  EXPECT_TRUE(l.estimated);
+  ASSERT_TRUE(l.ok) << l.message;
+  EXPECT_NEAR(l.t0, 0.012, 1e-12);
+  EXPECT_NEAR(l.interval, 0.012 / 20, 1e-15);
+  EXPECT_GE(l.intervals, 39);
+  EXPECT_LE(l.intervals, 40);
+  EXPECT_EQ(l.renormalisations, l.intervals);
+  EXPECT_DOUBLE_EQ(l.d0, 1e-7);  // min(1e-7, 2e-4 × 0.5 mm)
+  ASSERT_EQ(l.history.size(), static_cast<size_t>(l.renormalisations));
+  EXPECT_NEAR(l.history.front().first, l.t0 + l.interval, 1e-12);
+  EXPECT_NEAR(l.history.back().first, l.t0 + l.intervals * l.interval, 1e-12);
+  EXPECT_NEAR(l.history.back().second, l.exponent, 1e-9 * std::abs(l.exponent));
+  EXPECT_EQ(r.verdict.lyapunov_exponent, l.exponent);
+  // Clearance-joint impacts make the two trajectories diverge (docs/analysis.md): λT > 0.1.
+  EXPECT_GT(l.exponent * r.period, 0.1);
+  EXPECT_EQ(r.verdict.kind, "chaotic");
+  // The separation can be set.
+  o.lyapunov_d0 = 1e-8;
+  const Analysed b = analyse(yaml, {"solver.end_time=0.036"}, o);
+  ASSERT_TRUE(b.run.lyapunov.has_value());
+  EXPECT_EQ(b.run.lyapunov->d0, 1e-8);
+  // Too short a run after the transient (less than one period): no estimate.
+  const Analysed c = analyse(yaml, {"solver.end_time=0.018"}, o);
+  EXPECT_FALSE(c.run.lyapunov.has_value());
+  EXPECT_TRUE(std::isnan(c.run.verdict.lyapunov_exponent));
+}
+
+TEST(RunAnalysis, ExtraObserverSeesTheMainRun) {
+  const std::string yaml = read_file(example_path("flores_slider_crank.yaml"));
+  const Model model = load_model_text(yaml, "t.yaml", {"solver.end_time=0.012"}).model;
+  Recorder rec(model);
+  AnalysisOptions o;
+  o.lyapunov = false;
+  const RunAnalysis r = analyze_run(model, o, &rec);
+  ASSERT_TRUE(r.result.status.ok);
+  // Every output and every contact event of the main run (not of the ideal twin).
+  EXPECT_EQ(static_cast<long>(rec.time.size()), r.result.outputs);
+  EXPECT_EQ(static_cast<long>(rec.events.size()), r.result.stats.events);
+  // The contact modes are built from the same events: one impact per onset, with its velocity.
+  std::vector<double> onset_velocities;
+  for (const auto& e : rec.events)
+    if (e.onset) onset_velocities.push_back(e.velocity);
+  EXPECT_EQ(r.clearance[0].modes.impact_velocities, onset_velocities);
+  double peak = 0;
+  for (double v : rec["slider.ax"]) peak = std::max(peak, std::abs(v));
+  EXPECT_EQ(peak, stat(r, "slider.ax").peak);
+  // An option naming what does not exist fails before anything runs.
+  Recorder none(model);
+  o.fft_channels = {"slider.az"};
+  EXPECT_THROW(analyze_run(model, o, &none), std::invalid_argument);
+  o.fft_channels.clear();
+  o.phase = {{"rod_slider.ex", "rod_slider.nope"}};
+  EXPECT_THROW(analyze_run(model, o, &none), std::invalid_argument);
+  o.phase.clear();
+  o.poincare_driver = "rod_slider";
+  EXPECT_THROW(analyze_run(model, o, &none), std::invalid_argument);
+  EXPECT_TRUE(none.time.empty());
+}
+
+TEST(RunAnalysis, PeriodDriverAndIdealModel) {
+  const Model model =
+      load_model_text(read_file(example_path("flores_slider_crank.yaml")), "t.yaml", {}).model;
+  const Driver* d = period_driver(model, "");
+  ASSERT_NE(d, nullptr);
+  EXPECT_EQ(d->name, "crank");
+  EXPECT_EQ(period_driver(model, "crank"), d);
+  EXPECT_EQ(period_driver(model, "nope"), nullptr);
+  const Model ideal = ideal_model(model);
+  EXPECT_EQ(model.clearance_joint_count(), 1);
+  EXPECT_EQ(ideal.clearance_joint_count(), 0);
+  EXPECT_EQ(ideal.joints.size(), model.joints.size());
+  // Without a rotary driver there is no period: no stroboscopic section.
+  const Model free_model = load_model_text(R"Y(
+bodies:
+  block: {mass: 1.0, inertia: 0.01, position: [0.01, 0]}
+ground: {markers: {O: [0, 0]}}
+joints:
+  rail: {type: translational, guide: ground.O, slider: block, axis: [1, 0]}
+loads:
+  spring: {type: spring_damper, from: ground.O, to: block, stiffness: 100, free_length: 0}
+gravity: [0, 0]
+solver: {end_time: 0.5, output_interval: 1e-3, initial_state: given}
+)Y", "t.yaml", {}).model;
+  EXPECT_EQ(period_driver(free_model, ""), nullptr);
+  const RunAnalysis r = analyze_run(free_model, AnalysisOptions{});
+  ASSERT_TRUE(r.result.status.ok) << r.result.status.message;
+  EXPECT_EQ(r.period, 0.0);
+  EXPECT_TRUE(r.period_driver.empty());
+  EXPECT_TRUE(r.crank_angle_deg.empty());
+  EXPECT_FALSE(r.poincare.has_value());
+  EXPECT_FALSE(r.lyapunov.has_value());
+  EXPECT_EQ(r.verdict.sections, 0);
+}
