@@ -66,6 +66,18 @@ TEST(Cli, CheckAcceptsTheExamples) {
   const Result r = run_lash("check " + example());
   EXPECT_EQ(r.code, 0) << r.out;
   EXPECT_NE(r.out.find("ok: 3 bodies, 4 joints (1 with clearance)"), std::string::npos) << r.out;
+  // Every example in the folder.
+  int n = 0;
+  for (const auto& entry : fs::directory_iterator(lash::test::example_path("")))
+    if (entry.path().extension() == ".yaml") {
+      const Result each = run_lash("check " + entry.path().string());
+      EXPECT_EQ(each.code, 0) << entry.path() << "\n" << each.out;
+      ++n;
+    }
+  EXPECT_GE(n, 5);
+  const Result tmd = run_lash("check " + lash::test::example_path("tmd_slider_crank.yaml"));
+  EXPECT_NE(tmd.out.find("ok: 4 bodies, 4 joints (1 with clearance), 1 drivers, 1 loads"),
+            std::string::npos) << tmd.out;
 }
 
 TEST(Cli, CheckListsProblemsWithFileLineColumnAndExitsTwo) {
