@@ -66,6 +66,18 @@ TEST(Cli, CheckAcceptsTheExamples) {
   const Result r = run_lash("check " + example());
   EXPECT_EQ(r.code, 0) << r.out;
   EXPECT_NE(r.out.find("ok: 3 bodies, 4 joints (1 with clearance)"), std::string::npos) << r.out;
+  // Every example in the folder.
+  int n = 0;
+  for (const auto& entry : fs::directory_iterator(lash::test::example_path("")))
+    if (entry.path().extension() == ".yaml") {
+      const Result each = run_lash("check " + entry.path().string());
+      EXPECT_EQ(each.code, 0) << entry.path() << "\n" << each.out;
+      ++n;
+    }
+  EXPECT_GE(n, 5);
+  const Result tmd = run_lash("check " + lash::test::example_path("tmd_slider_crank.yaml"));
+  EXPECT_NE(tmd.out.find("ok: 4 bodies, 4 joints (1 with clearance), 1 drivers, 1 loads"),
+            std::string::npos) << tmd.out;
 }
 
 TEST(Cli, CheckListsProblemsWithFileLineColumnAndExitsTwo) {
@@ -254,6 +266,55 @@ TEST(Cli, TuneAbsorberRejectsBadInputWithExitTwo) {
     EXPECT_EQ(r.code, 2) << c.args << "\n" << r.out;
     EXPECT_NE(r.out.find(c.message), std::string::npos) << c.args << "\n" << r.out;
   }
+}
+
+// The snippet is meant to be pasted: merged into a small model (a link pinned to the ground, the
+// absorber sitting on its marker P or its centre of mass), it must pass `lash check` as printed,
+// apart from the absorber's position, and run with the absorber as a point mass.
+TEST(Cli, TuneAbsorberSnippetLoadsWhenPasted) {
+  const fs::path dir = temp_dir("snippet");
+  fs::create_directories(dir);
+  for (const char* attach : {"link.P", "link"}) {
+    SCOPED_TRACE(attach);
+    const Result r = run_lash(std::string("tune-absorber --frequency 25 --mass-ratio 0.05 ") +
+                              "--primary-mass 2 --json --attach " + attach);
+    ASSERT_EQ(r.code, 0) << r.out;
+    const std::string yaml = nlohmann::json::parse(r.out)["yaml"].get<std::string>();
+    const size_t b = yaml.find("bodies:\n"), l = yaml.find("loads:\n");
+    ASSERT_NE(b, std::string::npos) << yaml;
+    ASSERT_NE(l, std::string::npos) << yaml;
+    EXPECT_EQ(yaml.find("\n    inertia"), std::string::npos) << "the absorber is a point mass\n" << yaml;
+    const std::string bodies = yaml.substr(b + 8, l - b - 8), loads = yaml.substr(l + 7);
+    // The link's P is at the world origin, where the snippet puts the absorber.
+    const std::string model = yaml.substr(0, b) +
+                              "gravity: [0, -9.81]\n"
+                              "ground: {markers: {O: [-0.1, 0]}}\n"
+                              "bodies:\n"
+                              "  link: {mass: 2.0, inertia: 0.01, markers: {O: [-0.1, 0], P: [0, 0]}}\n" +
+                              bodies +
+                              "joints:\n"
+                              "  pivot: {type: revolute, journal: link.O, bearing: ground.O}\n"
+                              "loads:\n" +
+                              loads + "solver: {end_time: 0.05, output_interval: 1.0e-3}\n";
+    const fs::path file = dir / "pasted.yaml";
+    std::ofstream(file) << model;
+    const Result check = run_lash("check " + file.string());
+    EXPECT_EQ(check.code, 0) << check.out << "\n" << model;
+    EXPECT_NE(check.out.find("ok: 2 bodies, 1 joints (0 with clearance), 0 drivers, 1 loads"),
+              std::string::npos)
+        << check.out;
+    const Result run = run_lash("run " + file.string() + " -q -o " + (dir / "out").string());
+    ASSERT_EQ(run.code, 0) << run.out;
+    const auto summary = nlohmann::json::parse(lash::test::read_file((dir / "out" / "summary.json").string()));
+    const auto& channels = summary["channels"];
+    for (const char* c : {"absorber.x", "absorber.vy", "absorber_mount.Fx", "absorber_mount.dy",
+                          "absorber_mount.power"})
+      EXPECT_TRUE(channels.contains(c)) << c;
+    EXPECT_FALSE(channels.contains("absorber.phi")) << "a point mass has no angle";
+    // The link swings under gravity and the absorber follows it on its spring.
+    EXPECT_GT(channels["absorber.y"]["peak"].get<double>(), 1e-3);
+  }
+  fs::remove_all(dir);
 }
 
 TEST(Cli, ExpressionFailingMidRunExitsOneWithASummary) {

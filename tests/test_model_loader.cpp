@@ -1,7 +1,9 @@
 // The model loader: a catalogue of bad models, each message asserted with its line and column.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <filesystem>
 
 #include "io/model_loader.hpp"
 #include "test_support.hpp"
@@ -211,10 +213,33 @@ TEST(Overrides, BadPathsAndValuesAreReported) {
 }
 
 TEST(ModelLoader, ExamplesLoad) {
-  for (const char* name : {"flores_slider_crank.yaml", "flores_slider_crank_ideal.yaml",
-                           "flores_slider_crank_crank_rod_clearance.yaml"}) {
+  const std::vector<std::string> names{
+      "flores_slider_crank.yaml", "flores_slider_crank_ideal.yaml",
+      "flores_slider_crank_crank_rod_clearance.yaml", "flores_slider_crank_lugre.yaml",
+      "tmd_slider_crank.yaml"};
+  for (const auto& name : names)
     EXPECT_NO_THROW(load_model_file(lash::test::example_path(name))) << name;
+  // The list is every example: a new file in examples/ must be added here (and to the README).
+  for (const auto& entry : std::filesystem::directory_iterator(lash::test::example_path(""))) {
+    if (entry.path().extension() != ".yaml") continue;
+    EXPECT_NE(std::find(names.begin(), names.end(), entry.path().filename().string()), names.end())
+        << entry.path().filename() << " is not in this list";
   }
+  // What the new examples are for.
+  const Model lugre = load_model_file(lash::test::example_path("flores_slider_crank_lugre.yaml")).model;
+  ASSERT_TRUE(lugre.joints[2].clearance.has_value());
+  EXPECT_EQ(lugre.joints[2].clearance->friction_law, FrictionLaw::lugre);
+  const LuGreParams& g = lugre.joints[2].clearance->lugre;
+  EXPECT_LE(g.v_damping, 4 * std::sqrt(2 * M_E) * std::min(g.mu_static, g.mu_dynamic) / g.sigma1)
+      << "v_damping keeps the law passive";
+  const Model tmd = load_model_file(lash::test::example_path("tmd_slider_crank.yaml")).model;
+  ASSERT_EQ(tmd.bodies.size(), 4u);
+  EXPECT_EQ(tmd.bodies[3].type, BodyType::point_mass);
+  ASSERT_EQ(tmd.loads.size(), 1u);
+  EXPECT_EQ(tmd.loads[0].type, LoadType::bushing);
+  EXPECT_EQ(tmd.loads[0].frame_body, 1);  // the rod
+  ASSERT_EQ(tmd.sensors.size(), 1u);
+  EXPECT_EQ(tmd.sensors[0].type, SensorType::accelerometer);
 }
 
 TEST(ModelLoader, NonFiniteNumbersAndBadNamesAreRejected) {

@@ -46,25 +46,29 @@ std::string yaml_line(const std::string& text, const std::string& comment) {
   return fmt::format("{:<33} # {}\n", text, comment);
 }
 
-/// The absorber as model-file YAML: a point-mass body and a two-axis bushing to the link.
+/// The absorber as model-file YAML: a point-mass body (no `inertia` key: coordinates x, y and no
+/// rotation) and a two-axis bushing to the link whose axes are the link's. A bushing's `frame` is
+/// one of the two bodies it joins, or ground; a point mass has no axes, so it is the link here.
 std::string yaml_snippet(const AbsorberDesign& d, const std::string& attach) {
   const std::string link = attach.substr(0, attach.find('.'));
   return fmt::format(
              "# Tuned-mass absorber: Den Hartog tuning for a {:.6g} Hz mode, mass ratio {:.6g}\n"
              "# (lash tune-absorber). Merge into the model's bodies: and loads: maps.\n"
+             "# The absorber is a point mass (no inertia): it has no rotation to tune.\n"
              "# Both axes of the bushing get the same values for a two-axis absorber: it is\n"
-             "# isotropic, absorbs motion in any direction of the plane, and its frame does not\n"
-             "# change its force.\n",
+             "# isotropic and absorbs motion in any direction of the plane. Its spring force is\n"
+             "# then the same in any frame; its damper acts on the deflection rate seen in the\n"
+             "# frame's axes, here the link's: the absorber's motion relative to the link.\n",
              d.primary_frequency_hz, d.mass_ratio) +
          "bodies:\n  absorber:\n" +
-         yaml_line(fmt::format("    mass: {:.6g}", d.absorber_mass), "m_a, kg") +
-         yaml_line("    inertia: 1.0e-6",
-                   "kg·m², must be > 0; the bushing acts at the centre of mass, so any value") +
+         yaml_line(fmt::format("    mass: {:.6g}", d.absorber_mass), "m_a, kg; no inertia: a point mass") +
          yaml_line("    position: [0, 0]",
                    "set to the world position of " + attach + " at the initial pose") +
          "loads:\n  absorber_mount:\n    type: bushing\n" +
          yaml_line("    from: " + attach, "where the absorber sits on the link") +
-         "    to: absorber\n" + yaml_line("    frame: " + link, "axes of stiffness and damping") +
+         "    to: absorber\n" +
+         yaml_line("    frame: " + link,
+                   "axes of k_a and c_a: " + link + "'s (a point mass has none)") +
          yaml_line(fmt::format("    stiffness: [{:.6g}, {:.6g}]", d.stiffness, d.stiffness),
                    "k_a, N/m (x, y)") +
          yaml_line(fmt::format("    damping: [{:.6g}, {:.6g}]", d.damping, d.damping),
