@@ -126,7 +126,18 @@ std::vector<std::string> state_names(const Model& model, const Workspace& ws) {
 }
 
 void update_kin(Workspace& ws, const double* y) {
-  for (int b = 0; b < ws.nb; ++b) ws.kin[b] = body_kin(ws, b, y);
+  // In place: the blocks were set once by the Workspace; only pose and velocity change.
+  for (int b = 0; b < ws.nb; ++b) {
+    BodyKin& k = ws.kin[b];
+    const BodyBlock& bl = k.block;
+    k.r = Vec2(y[bl.offset], y[bl.offset + 1]);
+    k.v = Vec2(y[ws.nq + bl.offset], y[ws.nq + bl.offset + 1]);
+    if (bl.rot >= 0) {
+      k.phi = y[bl.rot];
+      k.omega = y[ws.nq + bl.rot];
+      k.A = rotation(k.phi);
+    }
+  }
 }
 
 Workspace::Workspace(const Model& model) {
