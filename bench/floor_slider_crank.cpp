@@ -9,7 +9,7 @@ namespace lash::bench {
 
 namespace {
 
-/// Lankarani–Nikravesh hysteresis factor 3(1 − cₑ²)/4 (shared/reference/formulas.md).
+/// Lankarani–Nikravesh hysteresis factor 3(1 − cₑ²)/4 (Lankarani & Nikravesh 1990).
 double ln_factor(double ce) { return 3.0 * (1.0 - ce * ce) / 4.0; }
 
 void require(bool ok, const std::string& what) {

@@ -1,6 +1,6 @@
 #pragma once
 /// @file floor_slider_crank.hpp
-/// The benchmark floor: the Flores slider-crank (shared/reference/mechanisms.md §1) with its
+/// The benchmark floor: the Flores slider-crank (examples/flores_slider_crank.yaml) with its
 /// rod–slider clearance joint, written by hand in minimal coordinates.
 ///
 /// The crank angle is prescribed, θ(t) = θ₀ + ω t, and the rod is pinned ideally to the crank
@@ -16,7 +16,7 @@
 /// where Q holds gravity and the clearance contact force as generalized forces:
 ///   Q_φ = m_r g·(L/2) t(φ) − F_N L n·t(φ),   Q_x = m_s g_x + F_N n_x,
 /// t(φ) = (−sin φ, cos φ), n the unit eccentricity (journal centre minus bearing centre).
-/// The contact is Lankarani–Nikravesh with exponent 1.5 (shared/reference/formulas.md), δ̇⁻ read
+/// The contact is Lankarani–Nikravesh with exponent 1.5 (Lankarani & Nikravesh 1990), δ̇⁻ read
 /// at the located onset, exactly as Lash's engine does (src/core/dynamics.cpp, simulate.cpp).
 ///
 /// Everything is SI. Free functions over an immutable parameter set and a small mutable state,

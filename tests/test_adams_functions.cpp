@@ -1,4 +1,4 @@
-// STEP, STEP5, IMPACT and BISTOP against shared/reference/formulas.md.
+// STEP, STEP5, IMPACT and BISTOP against their closed forms (MSC Adams function reference).
 #include <gtest/gtest.h>
 
 #include <cmath>

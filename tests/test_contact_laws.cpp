@@ -1,4 +1,4 @@
-// Normal contact laws against shared/reference/formulas.md, to round-off.
+// Normal contact laws against their published formulas (contact_laws.hpp), to round-off.
 #include <gtest/gtest.h>
 
 #include <cmath>

@@ -198,7 +198,7 @@ solver: {rtol: 1e-10, atol: 1e-12, end_time: 2.0, output_interval: 0.005, initia
 }
 
 TEST(Drivers, TranslationalExpressionDriverForceIsMassTimesAcceleration) {
-  // A 3 kg carriage moved by step5(time, 0, 0, 0.085, 0.230) (seed 004's closing stroke).
+  // A 3 kg carriage moved by step5(time, 0, 0, 0.085, 0.230) (the closing stroke of the UHV circuit breaker of Meng et al., Shock and Vibration (2015), UHV circuit-breaker mechanism).
   const std::string yaml = R"Y(
 bodies:
   carriage: {mass: 3.0, inertia: 0.1, position: [0, 0]}

@@ -1,7 +1,7 @@
 #pragma once
 /// @file adams_functions.hpp
-/// Adams-compatible smoothing and contact functions (shared/reference/formulas.md,
-/// "Time and smoothing functions"; seeds 002 eq. 9–10 and 004 eq. 6–8, 14).
+/// Adams-compatible smoothing and contact functions (MSC Adams
+/// function reference; as used by Erkaya, Doğan & Ulus, Mech. Mach. Theory 88 (2015), eq. 9–10, and Meng et al., Shock and Vibration (2015), UHV circuit-breaker mechanism, eq. 6–8, 14).
 /// All are pure functions of their arguments; units are those of the arguments.
 
 namespace lash {
@@ -11,7 +11,7 @@ namespace lash {
 double step(double x, double x0, double h0, double x1, double h1);
 
 /// STEP5(x, x0, h0, x1, h1): as step() with the quintic h0 + (h1 − h0)Δ³(10 − 15Δ + 6Δ²)
-/// (seed 004 eq. 14), continuous in the second derivative.
+/// (Meng et al., Shock and Vibration (2015), UHV circuit-breaker mechanism, eq. 14), continuous in the second derivative.
 double step5(double x, double x0, double h0, double x1, double h1);
 
 /// IMPACT(x, ẋ, x1, k, e, cmax, d), in Adams' argument order: a one-sided contact that acts

@@ -1,7 +1,7 @@
 #pragma once
 /// @file contact_laws.hpp
 /// Normal contact force laws for revolute clearance joints, all on one screen
-/// (shared/reference/formulas.md, "Normal force laws").
+/// (docs/architecture.md, "Clearance joints"; each law cites its paper).
 ///
 /// Symbols: δ penetration (m), δ̇ its rate (m/s, > 0 while approaching), δ̇⁻ the normal approach
 /// velocity at the located instant the impact began (m/s, > 0), K generalized stiffness
@@ -21,7 +21,7 @@ struct ContactParams {
   double damping_depth = 0.0;   ///< d_max of the IMPACT law, m (> 0)
 };
 
-/// Hertz cylinder-in-hole stiffness (seed 004 eq. 9, seed 002 eq. 6–7):
+/// Hertz cylinder-in-hole stiffness (Johnson, Contact Mechanics, 1985; as in Meng et al., Shock and Vibration (2015), UHV circuit-breaker mechanism, eq. 9, and Erkaya, Doğan & Ulus, Mech. Mach. Theory 88 (2015), eq. 6–7):
 /// K = 4 / (3(σ_B + σ_J)) · sqrt(R_B R_J / (R_B − R_J)), σ_k = (1 − ν_k²)/E_k.
 /// Radii in m, moduli in Pa; requires R_B > R_J > 0. Returns N/m^1.5.
 double hertz_cylinder_stiffness(double r_bearing, double r_journal, double e_bearing,
@@ -34,7 +34,7 @@ double hertz(double delta, const ContactParams& p);
 double hunt_crossley(double delta, double delta_dot, double delta_dot_impact,
                      const ContactParams& p);
 
-/// Lankarani–Nikravesh (1990; seed 002 eq. 5/8): F_N = K δⁿ (1 + 3(1 − cₑ²)/4 · δ̇/δ̇⁻),
+/// Lankarani–Nikravesh (1990; Erkaya, Doğan & Ulus, Mech. Mach. Theory 88 (2015), eq. 5/8): F_N = K δⁿ (1 + 3(1 − cₑ²)/4 · δ̇/δ̇⁻),
 /// clipped at ≥ 0.
 double lankarani_nikravesh(double delta, double delta_dot, double delta_dot_impact,
                            const ContactParams& p);
@@ -43,7 +43,7 @@ double lankarani_nikravesh(double delta, double delta_dot, double delta_dot_impa
 /// clipped at ≥ 0.
 double flores(double delta, double delta_dot, double delta_dot_impact, const ContactParams& p);
 
-/// Adams IMPACT as a clearance law (seeds 002 eq. 9–10, 004 eq. 6–8):
+/// Adams IMPACT as a clearance law (MSC Adams; Erkaya, Doğan & Ulus, Mech. Mach. Theory 88 (2015), eq. 9–10; Meng et al., Shock and Vibration (2015), UHV circuit-breaker mechanism, eq. 6–8):
 /// F_N = max(0, K δⁿ + STEP(δ, 0, 0, d_max, C_max) · δ̇).
 double impact_law(double delta, double delta_dot, const ContactParams& p);
 
