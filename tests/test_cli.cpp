@@ -375,5 +375,16 @@ TEST(Cli, RunContinuesFromASavedStateTimeAndAll) {
                (a / "final_state.json").string());
   EXPECT_EQ(r.code, 2) << r.out;
   EXPECT_NE(r.out.find("not before the model's end_time"), std::string::npos) << r.out;
+  // The same layout with another driver speed: the state breaks the driver's constraint.
+  r = run_lash("run " + example() + " -q -o " + bad.string() +
+               " --set drivers.crank.speed_rpm=3000 --from " + (a / "final_state.json").string());
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("does not satisfy this model's joints and drivers"), std::string::npos) << r.out;
+  // A redundant second driver on the crank: refused as without --from.
+  r = run_lash("run " + example() + " -q -o " + bad.string() +
+               " --set 'drivers.b={body: crank, coordinate: phi, speed_rpm: 5000}' --from " +
+               (a / "final_state.json").string());
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("redundant"), std::string::npos) << r.out;
   fs::remove_all(dir);
 }

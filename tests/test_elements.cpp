@@ -317,6 +317,22 @@ TEST(State, AContinuedRunAgreesWithAnUninterruptedOneOnARegularModel) {
       EXPECT_NEAR(r1[c][k0 + i], r3[c][i], 1e-7 * (1 + std::abs(r1[c][k0 + i]))) << c;
 }
 
+TEST(State, AFailedRunSavesAConsistentStateToContinueFrom) {
+  // A step budget that runs out mid-run: the saved state is the last point reached, its time
+  // and values together, so it satisfies the constraints and a run can continue from it.
+  Model m = load_model_file(example_path("flores_slider_crank.yaml"),
+                            {"solver.end_time=0.005", "solver.max_steps=300"}).model;
+  Workspace ws(m);
+  Recorder r(m);
+  const RunResult res = simulate(m, ws, r);
+  ASSERT_FALSE(res.status.ok);
+  EXPECT_LE(res.final_state.t, res.status.t);
+  EXPECT_EQ(resume_problem(m, ws, res.final_state), "");
+  const double omega = 5000 * 2 * M_PI / 60;
+  const int crank = 0;
+  EXPECT_NEAR(res.final_state.y[ws.blocks[crank].rot], omega * res.final_state.t, 1e-8);
+}
+
 TEST(State, AStateOfAnotherModelIsRefusedWithWhatDiffers) {
   Model flores = load_model_file(example_path("flores_slider_crank.yaml"), {"solver.end_time=0.001"}).model;
   Model ideal = load_model_file(example_path("flores_slider_crank_ideal.yaml")).model;

@@ -245,11 +245,8 @@ int main(int argc, char** argv) {
     try {
       lash::Workspace probe(model);
       start = lash::read_state(from_state, model, probe);
-      if (!(start.t < model.solver.end_time))
-        throw std::runtime_error(from_state + ": the state is at t = " + fmt::format("{:g}", start.t) +
-                                 " s, not before the model's end_time = " +
-                                 fmt::format("{:g}", model.solver.end_time) +
-                                 " s; raise it with --set solver.end_time=...");
+      if (const std::string why = lash::resume_problem(model, probe, start); !why.empty())
+        throw std::runtime_error(from_state + ": " + why);
     } catch (const std::exception& e) {
       std::cerr << "error: " << e.what() << "\n";
       return 2;

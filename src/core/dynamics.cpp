@@ -3,6 +3,7 @@
 #include <Eigen/LU>
 #include <Eigen/QR>
 #include <cmath>
+#include <sstream>
 #include <stdexcept>
 
 #include "core/elements/clearance_revolute.hpp"
@@ -361,6 +362,37 @@ void project_state(const Model& model, Workspace& ws, double t, Eigen::VectorXd&
   y.segment(nq, nq) -= cod.solve(phi_dot);
 }
 
+std::string constraint_problem(const Model& model, Workspace& ws, double t,
+                               const Eigen::VectorXd& y, bool check_residual) {
+  if (ws.m == 0) return "";
+  const int nq = ws.nq;
+  Eigen::VectorXd p(ws.m), pd(ws.m);
+  Eigen::MatrixXd pq(ws.m, nq);
+  update_kin(ws, y.data());
+  build_constraints(model, ws, t, y.data(), false, p, pq, &pd, nullptr);
+  // The actual constraint set must be independent for the Schur complement to be SPD.
+  Eigen::FullPivLU<Eigen::MatrixXd> lu(pq);
+  if (lu.rank() < ws.m)
+    return "the joints and drivers are redundant: " + std::to_string(ws.m) +
+           " constraint equations but only " + std::to_string(lu.rank()) +
+           " independent ones; remove a joint or a driver, or turn a revolute joint into a "
+           "clearance joint";
+  if (check_residual) {
+    const double pos = p.cwiseAbs().maxCoeff(), vel = pd.cwiseAbs().maxCoeff();
+    if (!(pos <= kStateTolerancePosition) || !(vel <= kStateToleranceVelocity)) {
+      std::ostringstream s;
+      s << "the state does not satisfy this model's joints and drivers at t = " << t
+        << " s (largest residual " << pos << " in position, " << vel
+        << " in velocity; at most " << kStateTolerancePosition << " and "
+        << kStateToleranceVelocity
+        << " are accepted): it was written by a model with other joints, markers or driver "
+           "motion";
+      return s.str();
+    }
+  }
+  return "";
+}
+
 Eigen::VectorXd initial_state(const Model& model, Workspace& ws) {
   const int nq = ws.nq;
   const bool ideal = model.solver.initial_state == InitialStateRule::ideal;
@@ -402,19 +434,8 @@ Eigen::VectorXd initial_state(const Model& model, Workspace& ws) {
   Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(phi_q);
   y.segment(nq, nq) -= cod.solve(phi_dot);
 
-  // The actual constraint set must be independent for the Schur complement to be SPD.
-  if (ws.m > 0) {
-    Eigen::VectorXd p(ws.m);
-    Eigen::MatrixXd pq(ws.m, nq);
-    update_kin(ws, y.data());
-    build_constraints(model, ws, 0.0, y.data(), false, p, pq, nullptr, nullptr);
-    Eigen::FullPivLU<Eigen::MatrixXd> lu(pq);
-    if (lu.rank() < ws.m)
-      throw std::runtime_error("the joints and drivers are redundant: " + std::to_string(ws.m) +
-                               " constraint equations but only " + std::to_string(lu.rank()) +
-                               " independent ones; remove a joint or a driver, or turn a "
-                               "revolute joint into a clearance joint");
-  }
+  if (const std::string why = constraint_problem(model, ws, 0.0, y, false); !why.empty())
+    throw std::runtime_error(why);
   return y;
 }
 

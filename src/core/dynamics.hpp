@@ -133,6 +133,16 @@ double constraint_residual(const Model& model, Workspace& ws, double t, const do
 /// the constraints cannot be satisfied.
 Eigen::VectorXd initial_state(const Model& model, Workspace& ws);
 
+/// Largest constraint residuals a state to continue from may have: |Φ| (m or rad) and |Φ̇|
+/// (m/s or rad/s). A run's own states hold the Baumgarte-bounded drift, orders below these.
+inline constexpr double kStateTolerancePosition = 1e-6;
+inline constexpr double kStateToleranceVelocity = 1e-4;
+
+/// Why y cannot be run at time t: redundant joints and drivers (Φ_q rank-deficient) or, with
+/// check_residual, constraint residuals beyond kStateTolerance*. "" when it can.
+std::string constraint_problem(const Model& model, Workspace& ws, double t,
+                               const Eigen::VectorXd& y, bool check_residual);
+
 /// Moves y (positions, then velocities) to the nearest state, in the least-squares sense, that
 /// satisfies the model's constraints at time t (clearance joints stay free). Used to perturb a
 /// state consistently (Lyapunov exponents). Throws std::runtime_error if it does not converge.

@@ -177,6 +177,8 @@ class Checker {
         break;
       case LoadType::spring_damper:
         if (!valid_body(l.a.body) || !valid_body(l.b.body)) return error(el, "body out of range");
+        if (l.a.body == l.b.body)
+          error(el, "both ends are on body '" + body_name(l.a.body) + "'; a spring acts between two bodies");
         if (std::isnan(l.free_length))
           l.free_length = (initial_point(m_, l.b) - initial_point(m_, l.a)).norm();
         if (!(l.free_length >= 0)) error(el, "free_length must be >= 0 m");
@@ -190,6 +192,9 @@ class Checker {
         break;
       case LoadType::bushing: {
         if (!valid_body(l.a.body) || !valid_body(l.b.body)) return error(el, "body out of range");
+        if (l.a.body == l.b.body)
+          return error(el, "both ends are on body '" + body_name(l.a.body) +
+                               "'; a bushing acts between two bodies");
         l.body_a = l.a.body;
         l.body_b = l.b.body;
         if (l.frame_body != kGround && l.frame_body != l.a.body && l.frame_body != l.b.body)
@@ -256,8 +261,9 @@ void finalize(Model& model) {
   std::vector<ModelProblem> clashes;
   for (const auto& c : channel_info(model, Workspace(model)))
     if (++seen[c.name] == 2)
-      clashes.push_back({"model", "two elements write the channel '" + c.name +
-                                      "'; rename one of them"});
+      clashes.push_back({"model", "two elements named '" + c.name.substr(0, c.name.rfind('.')) +
+                                      "' write the channel '" + c.name +
+                                      "' (a body and a sensor, say); rename one of them"});
   if (!clashes.empty()) {
     model.finalized = false;
     throw InvalidModel(clashes);

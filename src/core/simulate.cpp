@@ -63,6 +63,7 @@ Simulator::Simulator(const Model& model, Workspace& ws, std::vector<SectionPlane
   integrator_ = s.integrator == IntegratorKind::bdf ? make_cvode_bdf(problem, opt)
                                                     : make_dopri5(problem, opt);
   y_.resize(ws.ny);
+  y_try_.resize(ws.ny);
   ydot_.resize(ws.ny);
   g_event_.resize(ws.nc + planes_.size());
 }
@@ -107,15 +108,19 @@ State Simulator::snapshot() const { return {t_, y_, ws_.contact, integrator_->st
 // A function-try-block: an expression failing mid-run (ExpressionError) is a numerical failure.
 bool Simulator::advance_to(double t_target, Observer* observer) try {
   while (t_ < t_target) {
-    const Advance adv = integrator_->advance(t_target, y_);
-    t_ = adv.t;
+    const Advance adv = integrator_->advance(t_target, y_try_);
     if (adv.kind == Advance::failure) {
-      evaluate(model_, ws_, adv.t, y_.data(), ydot_.data());
+      // The state stays at the last point reached (time and values together), so that
+      // final_state.json and the message describe a consistent state; the status names the
+      // time of the failure.
+      evaluate(model_, ws_, t_, y_.data(), ydot_.data());
       status_ = {false, adv.t, "",
                  std::string("integrator ") + integrator_->name() + " failed: " + adv.message +
                      "; state: " + describe_contacts(model_, ws_)};
       return false;
     }
+    t_ = adv.t;
+    y_ = y_try_;
     if (adv.kind == Advance::reached) {
       t_ = t_target;
       // Safety net: a crossing no event function saw (entered and left within one step, or lost
@@ -228,6 +233,21 @@ std::string state_mismatch(const Workspace& ws, const State& state) {
   return s.str();
 }
 
+std::string resume_problem(const Model& model, Workspace& ws, const State& state) {
+  if (std::string bad = state_mismatch(ws, state); !bad.empty()) return bad;
+  std::ostringstream s;
+  if (state.t < 0.0) {
+    s << "the state is at t = " << state.t << " s; a run starts at t >= 0";
+    return s.str();
+  }
+  if (!(state.t < model.solver.end_time)) {
+    s << "the state is at t = " << state.t << " s, not before the model's end_time = "
+      << model.solver.end_time << " s; raise it with --set solver.end_time=...";
+    return s.str();
+  }
+  return constraint_problem(model, ws, state.t, state.y, true);
+}
+
 RunResult simulate(const Model& model, Workspace& ws, Observer& observer,
                    const SectionSchedule& sections, const std::vector<SectionPlane>& planes,
                    const RunOptions& options) {
@@ -238,14 +258,9 @@ RunResult simulate(const Model& model, Workspace& ws, Observer& observer,
   result.integrator = sim.integrator_name();
   double t0 = 0.0;
   if (options.from) {
-    if (const std::string bad = state_mismatch(ws, *options.from); !bad.empty())
+    if (const std::string bad = resume_problem(model, ws, *options.from); !bad.empty())
       throw std::invalid_argument("cannot continue from the given state: " + bad);
     t0 = options.from->t;
-    if (!(t0 < s.end_time))
-      throw std::invalid_argument("cannot continue from the given state: it is at t = " +
-                                  std::to_string(t0) + " s, not before end_time = " +
-                                  std::to_string(s.end_time) +
-                                  " s; raise solver.end_time (--set solver.end_time=...)");
     sim.resume(*options.from);
   } else {
     sim.start(0.0, initial_state(model, ws));

@@ -115,7 +115,7 @@ class Simulator {
   Workspace& ws_;
   std::vector<SectionPlane> planes_;
   std::unique_ptr<Integrator> integrator_;
-  Eigen::VectorXd y_, g_event_, ydot_;
+  Eigen::VectorXd y_, y_try_, g_event_, ydot_;
   double t_ = 0.0;
   RunStatus status_;
 };
@@ -128,6 +128,11 @@ RunResult simulate(const Model& model, Workspace& ws, Observer& observer,
 
 /// Checks that `state` fits the model's workspace layout; returns "" or what differs.
 std::string state_mismatch(const Workspace& ws, const State& state);
+
+/// Why a run cannot continue from `state`: a layout that differs, a time before 0 or not before
+/// end_time, redundant joints and drivers, or constraint residuals beyond
+/// kStateTolerance* (a state of a model with other joints, markers or driver motion). "" if it can.
+std::string resume_problem(const Model& model, Workspace& ws, const State& state);
 
 /// Parses "<body>.<x|y|phi|vx|vy|omega>=VALUE[,down]" into a plane; throws
 /// std::invalid_argument naming what is wrong.
