@@ -388,3 +388,26 @@ TEST(Cli, RunContinuesFromASavedStateTimeAndAll) {
   EXPECT_NE(r.out.find("redundant"), std::string::npos) << r.out;
   fs::remove_all(dir);
 }
+
+TEST(Cli, ASignalStopsTheRunAndKeepsSummaryAndState) {
+  // SIGTERM one second into a long run: the run stops at its next output, writes summary.json
+  // (ok false, "interrupted") and final_state.json, and exits 128 + 15; the CSV ends on a whole row.
+  const fs::path dir = temp_dir("signal");
+  const Result r = run_lash_raw("timeout --preserve-status -s TERM 1 " + std::string(LASH_BINARY) + " run " +
+                                example() + " -q -o " + dir.string() + " --set solver.end_time=5");
+  EXPECT_EQ(r.code, 143) << r.out;
+  const auto summary = nlohmann::json::parse(std::ifstream(dir / "summary.json"));
+  EXPECT_FALSE(summary["status"]["ok"].get<bool>());
+  EXPECT_NE(summary["status"]["message"].get<std::string>().find("interrupted by signal 15"),
+            std::string::npos);
+  ASSERT_TRUE(fs::exists(dir / "final_state.json"));
+  const auto state = nlohmann::json::parse(std::ifstream(dir / "final_state.json"));
+  EXPECT_GT(state["t"].get<double>(), 0.0);
+  EXPECT_LT(state["t"].get<double>(), 5.0);
+  std::ifstream ts(dir / "timeseries.csv");
+  std::string header, line, last;
+  std::getline(ts, header);
+  while (std::getline(ts, line)) last = line;
+  EXPECT_EQ(std::count(last.begin(), last.end(), ','), std::count(header.begin(), header.end(), ','));
+  fs::remove_all(dir);
+}

@@ -2,7 +2,10 @@
 // validates. Exit codes: 0 success, 1 numerical failure or I/O error, 2 bad model or options.
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
+#include <signal.h>
 #include <unistd.h>
+
+#include <atomic>
 
 #include <algorithm>
 #include <chrono>
@@ -48,6 +51,20 @@ class ProgressObserver : public lash::Observer {
   long rhs_ = 0;
   std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now(), last_{};
 };
+
+/// The signal that asked the run to stop (0: none). A handler may only store it.
+std::atomic<int> g_interrupt{0};
+extern "C" void on_signal(int sig) { g_interrupt.store(sig); }
+
+/// SIGINT, SIGTERM and SIGHUP end the run at its next output, which then writes its summary and
+/// final state like any stopped run; a second signal ends the program at once.
+void install_signal_handlers() {
+  struct sigaction sa {};
+  sa.sa_handler = on_signal;
+  sa.sa_flags = SA_RESETHAND;
+  sigemptyset(&sa.sa_mask);
+  for (int sig : {SIGINT, SIGTERM, SIGHUP}) sigaction(sig, &sa, nullptr);
+}
 
 int report_model_error(const lash::ModelError& e) {
   for (const auto& d : e.diagnostics()) std::cerr << d.str() << "\n";
@@ -240,6 +257,8 @@ int main(int argc, char** argv) {
     return 2;
   }
   lash::RunOptions run_options;
+  install_signal_handlers();
+  run_options.interrupt = &g_interrupt;
   lash::State start;
   if (!from_state.empty()) {
     try {
@@ -278,6 +297,11 @@ int main(int argc, char** argv) {
     if (with_report) report_notes = lash::write_report(lash::report_data(model, ra), out_dir);
     if (!result.status.ok) {
       for (const auto& line : report_notes) std::cerr << "report: " << line << "\n";
+      if (const int sig = g_interrupt.load(); sig != 0) {
+        std::cerr << "\ninterrupted at t = " << result.status.t << " s; results up to that time, "
+                  << "summary.json and final_state.json are in " << out_dir << "/\n";
+        return 128 + sig;
+      }
       std::cerr << "\nerror: simulation stopped at t = " << result.status.t << " s"
                 << (result.status.element.empty() ? "" : ", joint '" + result.status.element + "'")
                 << ": " << result.status.message << "\nresults up to that time are in " << out_dir

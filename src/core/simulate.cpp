@@ -340,6 +340,13 @@ RunResult simulate(const Model& model, Workspace& ws, Observer& observer,
     }
     ok = emit(t_out);
     if (ok && is_restart(t_out)) sim.resume(sim.snapshot());  // as at an event
+    if (ok && options.interrupt && options.interrupt->load() != 0) {
+      result.status = {false, t_out, "",
+                       "interrupted by signal " + std::to_string(options.interrupt->load()) +
+                           "; results up to this time are kept, and final_state.json continues "
+                           "the run with --from"};
+      ok = false;
+    }
     ++k;
   }
   if (result.status.ok) result.status.t = s.end_time;  // the time reached

@@ -4,6 +4,7 @@
 /// interval (from dense output, independent of the steps), located contact onsets and
 /// separations, and numerical failures turned into a status.
 #include <Eigen/Core>
+#include <atomic>
 #include <memory>
 #include <string>
 #include <vector>
@@ -85,6 +86,9 @@ struct RunOptions {
   /// Times (on the output grid) at which the integrator restarts as it does at an event; a run
   /// that stops at such a time and is continued with `from` gives bit-identical results.
   std::vector<double> restarts;
+  /// Checked at every output: when it holds a non-zero value (a signal number, set by a signal
+  /// handler), the run stops there as a failure "interrupted", keeping everything up to it.
+  const std::atomic<int>* interrupt = nullptr;
 };
 
 /// Integrates one model forward with its contact events, from a state the caller sets: the
