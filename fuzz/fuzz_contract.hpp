@@ -76,7 +76,9 @@ inline std::string model_invariant_violation(const Model& m) {
   const int nj = static_cast<int>(m.joints.size());
   for (const Driver& d : m.drivers) {
     const std::string at = "driver '" + d.name + "': ";
-    if (d.joint < 0 || d.joint >= nj) return at + "joint index out of range";
+    if (d.target == DriverTarget::joint ? (d.joint < 0 || d.joint >= nj)
+                                        : (d.body < 0 || d.body >= static_cast<int>(m.bodies.size())))
+      return at + "joint or body index out of range";
     if (!finite(d.speed) || !finite(d.initial)) return at + "speed or initial not finite";
   }
   for (const Load& l : m.loads) {
@@ -85,8 +87,12 @@ inline std::string model_invariant_violation(const Model& m) {
       return at + "body index out of range";
     if (!(finite(l.stiffness) && l.stiffness >= 0 && finite(l.damping) && l.damping >= 0))
       return at + "stiffness or damping not finite and >= 0";
-    if (!(finite(l.free_length) && l.free_length >= 0) || !finite(l.angle0))
-      return at + "free length or angle not finite";
+    // Derived by finalize for the kinds that use them (NaN elsewhere: unused).
+    if (l.type == LoadType::spring_damper && !(finite(l.free_length) && l.free_length >= 0))
+      return at + "free length not finite and >= 0";
+    if ((l.type == LoadType::torsional_spring_damper || l.type == LoadType::bushing) &&
+        !finite(l.angle0))
+      return at + "rest angle not finite";
   }
   const SolverSettings& s = m.solver;
   if (!(finite(s.rtol) && s.rtol > 0 && finite(s.atol) && s.atol > 0))
