@@ -4,7 +4,8 @@
 /// it symbolically, and the derivatives are printed back as muparser text, compiled and evaluated
 /// by muparser like any expression (core/expression.hpp). GiNaC runs only here, when an expression
 /// is compiled, under one process-wide mutex: GiNaC's reference counts and global tables are not
-/// thread-safe. Evaluation never touches GiNaC.
+/// thread-safe (a program that also uses GiNaC itself on other threads must not do so while Lash
+/// compiles driver expressions). Evaluation never touches GiNaC.
 ///
 /// Differentiable: numbers, `time`/`t`, `pi`/`_pi`/`_e`; `+ - * / ^` (a^b^c needs parentheses);
 /// sin cos tan asin acos atan atan2 sinh cosh tanh asinh acosh atanh exp sqrt ln log log2 log10;
