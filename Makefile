@@ -18,11 +18,13 @@ demo: build
 test: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
 
-# The whole suite once more under AddressSanitizer + UndefinedBehaviorSanitizer.
+# The whole suite once more under AddressSanitizer + UndefinedBehaviorSanitizer (tests/lsan.supp:
+# leaks of libraries' static initialisers, not Lash's).
 test-sanitize: deps
 	@cmake -S . -B build-sanitize -G Ninja -DCMAKE_BUILD_TYPE=Debug -DLASH_SANITIZE=ON -DLASH_BENCH=OFF >/dev/null
 	@cmake --build build-sanitize -j $(JOBS)
-	cd build-sanitize && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 ctest --output-on-failure -j $(JOBS)
+	cd build-sanitize && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
+	  LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp ctest --output-on-failure -j $(JOBS)
 
 # The code that runs on several threads (concurrent simulations, FFTW planning) under
 # ThreadSanitizer: only test_threads and test_signal are built and run, in build-tsan/.

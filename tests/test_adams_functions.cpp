@@ -1,6 +1,7 @@
 // STEP, STEP5, IMPACT and BISTOP against their closed forms (MSC Adams function reference).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "core/adams_functions.hpp"
@@ -59,4 +60,93 @@ TEST(Bistop, FreeBetweenStopsAndSignedOutside) {
   EXPECT_NEAR(bistop(1.1, 0.0, 0.0, 1.0, k, e, cmax, d), -k * 0.01, 1e-9);    // pushes −
   EXPECT_NEAR(bistop(1.1, 2.0, 0.0, 1.0, k, e, cmax, d), -k * 0.01 - cmax * 2.0, 1e-9);
   EXPECT_EQ(bistop(1.001, -1e6, 0.0, 1.0, k, e, cmax, d), 0.0);               // clipped
+}
+
+// Closed forms of the ramps on [0, 2] from 0 to 1, expanded in powers of x (Δ = x/2):
+// step  = 0.75x² − 0.25x³;  step5 = 1.25x³ − 0.9375x⁴ + 0.1875x⁵.
+namespace {
+double cubic_closed(int n, double x) {
+  switch (n) {
+    case 1: return 1.5 * x - 0.75 * x * x;
+    case 2: return 1.5 - 1.5 * x;
+    case 3: return -1.5;
+    default: return 0.0;
+  }
+}
+double quintic_closed(int n, double x) {
+  switch (n) {
+    case 1: return 3.75 * x * x - 3.75 * x * x * x + 0.9375 * x * x * x * x;
+    case 2: return 7.5 * x - 11.25 * x * x + 3.75 * x * x * x;
+    case 3: return 7.5 - 22.5 * x + 11.25 * x * x;
+    case 4: return -22.5 + 22.5 * x;
+    case 5: return 22.5;
+    default: return 0.0;
+  }
+}
+// Relative comparison with a floor for values that cross zero.
+void expect_close(double got, double want, const char* what, int n, double x) {
+  EXPECT_NEAR(got, want, 1e-12 * std::max(1.0, std::abs(want))) << what << " n=" << n << " x=" << x;
+}
+}  // namespace
+
+TEST(StepDerivative, MatchesTheExpandedCubicInsideTheRamp) {
+  for (double x : {0.1, 0.5, 0.999, 1.0, 1.3, 1.9999}) {
+    expect_close(step_derivative(0, x, 0, 0, 2, 1), 0.75 * x * x - 0.25 * x * x * x, "step", 0, x);
+    for (int n = 1; n <= 5; ++n)
+      expect_close(step_derivative(n, x, 0, 0, 2, 1), cubic_closed(n, x), "step", n, x);
+    // Shifted and scaled: step(x, 1, 2, 3, −1) = 2 − 3 step(x − 1, 0, 0, 2, 1).
+    for (int n = 1; n <= 3; ++n)
+      expect_close(step_derivative(n, x + 1, 1, 2, 3, -1), -3.0 * cubic_closed(n, x), "shifted", n, x);
+  }
+}
+
+TEST(StepDerivative, EdgesOfTheRamp) {
+  // The slope is continuous and 0 at both ends; the second derivative jumps from 0 to ±6(h1 −
+  // h0)/L² and at the ends themselves takes the value outside the ramp, as step() does.
+  for (double x : {-1.0, 0.0, 2.0, 3.0}) {
+    for (int n = 1; n <= 3; ++n) EXPECT_EQ(step_derivative(n, x, 0, 0, 2, 1), 0.0) << n << " " << x;
+  }
+  const double in = 1e-12;
+  EXPECT_NEAR(step_derivative(1, in, 0, 0, 2, 1), 0.0, 1e-11);
+  EXPECT_NEAR(step_derivative(2, in, 0, 0, 2, 1), 6.0 / 4.0, 1e-11);
+  EXPECT_NEAR(step_derivative(2, 2 - in, 0, 0, 2, 1), -6.0 / 4.0, 1e-11);
+  EXPECT_EQ(step_derivative(0, 0.0, 0, 7, 2, 1), 7.0);  // n = 0 is step itself
+}
+
+TEST(Step5Derivative, MatchesTheExpandedQuinticInsideTheRamp) {
+  for (double x : {0.1, 0.5, 0.999, 1.0, 1.3, 1.9999}) {
+    expect_close(step5_derivative(0, x, 0, 0, 2, 1),
+                 1.25 * x * x * x - 0.9375 * x * x * x * x + 0.1875 * x * x * x * x * x, "step5", 0, x);
+    for (int n = 1; n <= 7; ++n)
+      expect_close(step5_derivative(n, x, 0, 0, 2, 1), quintic_closed(n, x), "step5", n, x);
+    for (int n = 1; n <= 5; ++n)
+      expect_close(step5_derivative(n, x + 1, 1, 2, 3, -1), -3.0 * quintic_closed(n, x), "shifted", n, x);
+  }
+}
+
+TEST(Step5Derivative, FirstAndSecondDerivativesVanishAtTheEdges) {
+  // STEP5 is C²: slope and curvature 0 at both ends, from inside as well; the third jumps
+  // (to 7.5 = 60/L³ at x0⁺) and at the ends takes the value outside.
+  const double in = 1e-9;
+  for (double x : {0.0, 2.0}) {
+    EXPECT_EQ(step5_derivative(1, x, 0, 0, 2, 1), 0.0);
+    EXPECT_EQ(step5_derivative(2, x, 0, 0, 2, 1), 0.0);
+    EXPECT_EQ(step5_derivative(3, x, 0, 0, 2, 1), 0.0);
+  }
+  EXPECT_NEAR(step5_derivative(1, in, 0, 0, 2, 1), 0.0, 1e-16);
+  EXPECT_NEAR(step5_derivative(2, 2 - in, 0, 0, 2, 1), 0.0, 1e-8);
+  EXPECT_NEAR(step5_derivative(3, in, 0, 0, 2, 1), 7.5, 1e-7);
+}
+
+TEST(StepDerivative, EachOrderIsTheSlopeOfThePreviousOne) {
+  // The same quantity two ways: central differences of order n against order n + 1 (√ε-level).
+  const double h = 1e-6;
+  for (double x : {0.3, 1.1, 1.7}) {
+    for (int n = 0; n <= 4; ++n) {
+      const double fd = (step5_derivative(n, x + h, 0, 0, 2, 1) - step5_derivative(n, x - h, 0, 0, 2, 1)) / (2 * h);
+      EXPECT_NEAR(fd, step5_derivative(n + 1, x, 0, 0, 2, 1), 1e-6) << n << " " << x;
+      const double fc = (step_derivative(n, x + h, 0, 0, 2, 1) - step_derivative(n, x - h, 0, 0, 2, 1)) / (2 * h);
+      EXPECT_NEAR(fc, step_derivative(n + 1, x, 0, 0, 2, 1), 1e-6) << n << " " << x;
+    }
+  }
 }

@@ -258,6 +258,25 @@ TEST(ModelLoader, PrescribedMotionMustDependOnTimeOnly) {
   EXPECT_NE(d[0].message.find("function of time only"), std::string::npos) << d[0].str();
 }
 
+TEST(ModelLoader, MotionThatCannotBeDifferentiatedIsRejectedWithAHint) {
+  // A driver needs exact time derivatives: a switch written with ?: is refused at load time,
+  // pointing at the expression, with the way out; as a load the same text would be accepted.
+  const auto d = problems(with("speed_rpm: 5000", "motion: \"time < 0.01 ? 0 : time - 0.01\""));
+  ASSERT_EQ(d.size(), 1u);
+  EXPECT_EQ(d[0].str(),
+            "model.yaml:31:33: driver 'motor': bad expression in 'motion': cannot differentiate "
+            "'time < 0.01 ? 0 : time - 0.01' in time: comparisons, '&&', '||' and 'c ? a : b' "
+            "have no derivative; switch between motions smoothly with step() or step5(), or use "
+            "min, max, abs");
+  // A speed profile needs one derivative; a constant-looking number stays a constant speed.
+  EXPECT_TRUE(problems(with("speed_rpm: 5000", "speed: \"step5(time, 0, 0, 0.01, 100)\"")).empty());
+  const auto s = problems(with("speed_rpm: 5000", "speed: \"time > 1 ? 1 : 0\""));
+  ASSERT_EQ(s.size(), 1u);
+  EXPECT_NE(s[0].message.find("bad expression in 'speed': cannot differentiate"), std::string::npos)
+      << s[0].str();
+  EXPECT_TRUE(problems(with("speed_rpm: 5000", "motion: \"max(0, time - 0.01)^3\"")).empty());
+}
+
 TEST(ModelLoader, MissingSectionPointsIntoTheFileNotAtAnOverride) {
   std::string s = kGood;
   s = s.substr(0, s.find("solver:"));

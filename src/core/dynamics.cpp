@@ -210,9 +210,13 @@ Workspace::Workspace(const Model& model) {
 
   for (const auto& b : model.bodies) vars.body_names.push_back(b.name);
   vars.body_state.assign(6 * nb, 0.0);
-  for (const auto& d : model.drivers)
-    driver_expr.emplace_back(d.profile == DriverProfile::constant_speed ? "0" : d.expression,
-                             vars);
+  // Drivers need ḟ, f̈ of a position profile and f̈ of a speed profile (exact: expression.hpp).
+  for (const auto& d : model.drivers) {
+    if (d.profile == DriverProfile::constant_speed)
+      driver_expr.emplace_back("0", vars);
+    else
+      driver_expr.emplace_back(d.expression, vars, d.profile == DriverProfile::position ? 2 : 1);
+  }
   for (const auto& l : model.loads) {
     std::vector<Expression> ex;
     if (l.type == LoadType::force) {

@@ -2,11 +2,13 @@
 
 #include <muParser.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
 
 #include "core/adams_functions.hpp"
+#include "core/symbolic_derivatives.hpp"
 
 namespace lash {
 
@@ -37,6 +39,7 @@ void configure(mu::Parser& p, ExpressionVariables& vars) {
   for (const char* name : {"impact", "IMPACT"}) p.DefineFun(name, mu_impact);
   for (const char* name : {"bistop", "BISTOP"}) p.DefineFun(name, mu_bistop);
   p.DefineConst("pi", M_PI);
+  define_derivative_functions(p);  // _step_d, _step5_d: what derivative texts call
   vars.time = static_cast<double>(vars.time);  // storage for a moved-from block, if need be
   p.DefineVar("time", vars.time.address());
   p.DefineVar("t", vars.time.address());
@@ -51,17 +54,53 @@ std::string describe_failure(const std::string& text, double time, const std::st
   std::snprintf(at, sizeof at, "%.9g", time);
   return "expression '" + text + "' failed at time " + at + " s: " + message;
 }
+
+// GiNaC and muparser must read a text alike (operator precedence, function names): the value
+// as GiNaC read it is compared with muparser's at a few times. Gross misreadings (-2^2 read as 4)
+// differ by far more than the rounding of reordered sums this tolerates.
+void check_same_reading(const std::string& text, const mu::Parser& original,
+                        const std::string& symbolic, ExpressionVariables& vars) {
+  if (symbolic.size() > static_cast<size_t>(mu::MaxLenExpression)) return;  // cannot compile it
+  mu::Parser p;
+  configure(p, vars);
+  p.SetExpr(symbolic);
+  double* time = vars.time.address();
+  const double saved = *time;
+  for (const double t : {0.0, 0.0123, 0.37, 1.9, -0.61, 13.7}) {
+    *time = t;
+    double a, b;
+    try {
+      a = original.Eval();
+      b = p.Eval();
+    } catch (const mu::Parser::exception_type&) {
+      continue;  // e.g. a step whose bounds are invalid at this time
+    }
+    if (!std::isfinite(a) || !std::isfinite(b)) continue;
+    if (std::abs(a - b) > 1e-9 * std::max(std::abs(a), std::abs(b)) + 1e-12) {
+      *time = saved;
+      char msg[160];
+      std::snprintf(msg, sizeof msg, "GiNaC reads it differently from muparser (%.17g instead of "
+                    "%.17g at time %g s); please report this expression", b, a, t);
+      throw std::invalid_argument("cannot differentiate '" + text + "' in time: " + msg);
+    }
+  }
+  *time = saved;
+}
 }  // namespace
 
 struct Expression::Impl {
-  mu::Parser parser;
+  mu::Parser parser;  // the value
+  // "_tmp0 = ..., (value), d/dt, d²/dt²": one evaluation gives them all (symbolic_derivatives.hpp)
+  mu::Parser derivatives;
+  std::vector<double> temporaries;  // bound by `derivatives`; never resized after compiling
 };
 
 ExpressionError::ExpressionError(const std::string& text, double time, const std::string& message)
     : std::runtime_error(describe_failure(text, time, message)), text_(text), time_(time) {}
 
-Expression::Expression(const std::string& text, ExpressionVariables& vars)
-    : impl_(std::make_unique<Impl>()), time_(nullptr), text_(text) {
+Expression::Expression(const std::string& text, ExpressionVariables& vars, int time_derivatives)
+    : impl_(std::make_unique<Impl>()), time_(nullptr), text_(text),
+      n_derivatives_(std::max(time_derivatives, 0)) {
   try {
     configure(impl_->parser, vars);
     time_ = vars.time.address();
@@ -69,6 +108,17 @@ Expression::Expression(const std::string& text, ExpressionVariables& vars)
     impl_->parser.Eval();  // compile now so errors surface at load time
     for (const auto& [name, ptr] : impl_->parser.GetUsedVar())
       if (name != "time" && name != "t") uses_state_ = true;
+    if (n_derivatives_ == 0) return;
+    // Differentiate symbolically once (throws std::invalid_argument), compile the results.
+    const SymbolicDerivatives sym = symbolic_time_derivatives(text, n_derivatives_);
+    check_same_reading(text, impl_->parser, sym.value, vars);
+    configure(impl_->derivatives, vars);
+    impl_->temporaries.assign(sym.temporaries.size(), 0.0);
+    for (size_t i = 0; i < sym.temporaries.size(); ++i)
+      impl_->derivatives.DefineVar(sym.temporaries[i].first, &impl_->temporaries[i]);
+    impl_->derivatives.SetExpr(muparser_text(sym, text));
+    int n = 0;
+    impl_->derivatives.Eval(n);
   } catch (const mu::Parser::exception_type& e) {
     throw std::invalid_argument(e.GetMsg());
   }
@@ -86,33 +136,30 @@ double Expression::eval() const {
   }
 }
 
-void Expression::eval_derivatives(double t, double& f, double& fdot, double& fddot) const {
-  // 5-point central differences: truncation O(h⁴ f⁽⁶⁾) (O(h f''') across a kink such as the ends
-  // of step5), round-off ~10ε|f|/h² ≈ 2e-5 |f| s⁻² at h = 1e-5 s.
-  constexpr double h = 1e-5;
+void Expression::eval_derivatives(double t, double* out) const {
   const double saved = *time_;
-  double v[5];
-  for (int k = -2; k <= 2; ++k) {
-    *time_ = t + k * h;
-    try {
-      v[k + 2] = impl_->parser.Eval();
-    } catch (const mu::Parser::exception_type& e) {
-      const double at = *time_;
-      *time_ = saved;
-      throw ExpressionError(text_, at, e.GetMsg());
+  *time_ = t;
+  try {
+    if (n_derivatives_ == 0) {
+      out[0] = impl_->parser.Eval();
+    } else {
+      int n = 0;  // the temporaries' values, then the n_derivatives_ + 1 wanted
+      const double* v = impl_->derivatives.Eval(n) + (n - n_derivatives_ - 1);
+      for (int k = 0; k <= n_derivatives_; ++k) out[k] = v[k];
     }
+  } catch (const mu::Parser::exception_type& e) {
+    *time_ = saved;
+    throw ExpressionError(text_, t, e.GetMsg());
   }
   *time_ = saved;
-  f = v[2];
-  fdot = (v[0] - 8.0 * v[1] + 8.0 * v[3] - v[4]) / (12.0 * h);
-  fddot = (-v[0] + 16.0 * v[1] - 30.0 * v[2] + 16.0 * v[3] - v[4]) / (12.0 * h * h);
 }
 
-std::string check_expression(const std::string& text, const std::vector<std::string>& body_names) {
+std::string check_expression(const std::string& text, const std::vector<std::string>& body_names,
+                             int time_derivatives) {
   ExpressionVariables vars;
   vars.body_names = body_names;
   try {
-    Expression e(text, vars);
+    Expression e(text, vars, time_derivatives);
     const double v = e.eval();
     if (!std::isfinite(v)) return "evaluates to " + std::to_string(v) + " at time 0";
   } catch (const std::exception& e) {

@@ -1,7 +1,8 @@
 #pragma once
 /// @file expression.hpp
 /// Expressions of time (and of body state) in model files, evaluated with muparser and extended
-/// with the Adams functions step, step5, impact and bistop (core/adams_functions.hpp).
+/// with the Adams functions step, step5, impact and bistop (core/adams_functions.hpp); the time
+/// derivatives a driver needs are exact (core/symbolic_derivatives.hpp).
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -59,22 +60,30 @@ class ExpressionError : public std::runtime_error {
   double time_;
 };
 
-/// A compiled expression bound to an ExpressionVariables block.
+/// A compiled expression bound to an ExpressionVariables block, optionally with its first time
+/// derivatives, exact: taken symbolically once, when it is compiled (core/symbolic_derivatives.hpp),
+/// and evaluated by muparser together with the value.
 class Expression {
  public:
-  /// Compiles `text`; throws std::invalid_argument with muparser's message on a syntax error or
-  /// an unknown name. `vars` (or the block it is moved into) must outlive the expression.
-  Expression(const std::string& text, ExpressionVariables& vars);
+  /// Compiles `text`, and with `time_derivatives` = n > 0 also its first n time derivatives.
+  /// Throws std::invalid_argument with muparser's message on a syntax error or an unknown name,
+  /// and "cannot differentiate 'TEXT' in time: REASON" when n > 0 and the text is not
+  /// differentiable (it reads body state, compares, ...; symbolic_derivatives.hpp).
+  /// `vars` (or the block it is moved into) must outlive the expression.
+  Expression(const std::string& text, ExpressionVariables& vars, int time_derivatives = 0);
   ~Expression();
   Expression(Expression&&) noexcept;
   Expression& operator=(Expression&&) noexcept;
 
   /// Value at the current variables. Throws ExpressionError if muparser fails.
   double eval() const;
-  /// Value, first and second time derivative at time t (5-point central differences; the
-  /// body-state variables are held fixed). Only meaningful for expressions of time alone.
-  /// Throws ExpressionError if muparser fails (the time variable is restored).
-  void eval_derivatives(double t, double& f, double& fdot, double& fddot) const;
+  /// The value and its first time_derivatives() time derivatives at time t, into
+  /// out[0 .. time_derivatives()] (units of the value per s^k), exact but for rounding; the
+  /// body-state variables are held as they are. The time variable is restored afterwards.
+  /// Lock-free and allocation-free. Throws ExpressionError if muparser fails.
+  void eval_derivatives(double t, double* out) const;
+  /// How many time derivatives eval_derivatives() gives.
+  int time_derivatives() const { return n_derivatives_; }
   const std::string& text() const { return text_; }
   bool depends_on_state() const { return uses_state_; }
 
@@ -84,9 +93,12 @@ class Expression {
   double* time_;  ///< the bound time variable (ExpressionVariables::time's pinned storage)
   std::string text_;
   bool uses_state_ = false;
+  int n_derivatives_ = 0;
 };
 
-/// Checks an expression compiles with the given body names; returns "" or the error message.
-std::string check_expression(const std::string& text, const std::vector<std::string>& body_names);
+/// Checks an expression compiles with the given body names and, with `time_derivatives` > 0, that
+/// it can be differentiated that many times in time; returns "" or the error message.
+std::string check_expression(const std::string& text, const std::vector<std::string>& body_names,
+                             int time_derivatives = 0);
 
 }  // namespace lash

@@ -683,10 +683,12 @@ class Loader {
         continue;
       }
       const bool rotary = driver_is_rotary(m, d);
-      auto time_expression = [&](const std::string& key, const std::string& text) {
+      // A position profile needs two exact time derivatives, a speed profile one (expression.hpp).
+      auto time_expression = [&](const std::string& key, const std::string& text, int derivatives) {
         std::string err = check_expression(text, {});
         if (!err.empty() && check_expression(text, body_names_).empty())
           err = "a prescribed motion must be a function of time only";
+        if (err.empty()) err = check_expression(text, {}, derivatives);
         if (!err.empty()) r_.error(s.get(key), s.element(), "bad expression in '" + key + "': " + err);
       };
       if (auto rpm = s.number("speed_rpm", " (rev/min)")) {
@@ -701,7 +703,7 @@ class Loader {
         } else if (sn.IsScalar()) {  // a speed profile: an expression of time, integrated
           d.profile = DriverProfile::speed;
           d.expression = sn.Scalar();
-          time_expression("speed", d.expression);
+          time_expression("speed", d.expression, 1);
         } else {
           r_.error(sn, s.element(), "speed must be a number (rad/s or m/s) or an expression of time");
         }
@@ -709,7 +711,7 @@ class Loader {
       if (auto ex = s.text("motion")) {
         d.profile = DriverProfile::position;
         d.expression = *ex;
-        time_expression("motion", *ex);
+        time_expression("motion", *ex, 2);
       }
       // Initial coordinate: given, else derived from the initial poses by finalize.
       if (auto init = s.number("initial", " (rad or m)")) d.initial = *init;

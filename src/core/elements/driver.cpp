@@ -5,7 +5,9 @@
 // - body target: x, y or φ of a body relative to the ground (Φ = q_i − initial − f), so the
 //   body's own joints may have clearance.
 // Profiles: constant speed f = ωt; position f = expression(t); speed ḟ = expression(t), whose
-// integral f is the auxiliary state p (ṗ = ḟ), so f and ḟ are exact.
+// integral f is the auxiliary state p (ṗ = ḟ). The expressions' time derivatives (ḟ, f̈ of a
+// position; f̈ of a speed) are exact, differentiated symbolically when the workspace compiles them
+// (core/symbolic_derivatives.hpp).
 #include "core/elements/constraint_rows.hpp"
 
 namespace lash {
@@ -24,12 +26,16 @@ void driver_motion(const Model& model, const Workspace& ws, int d, double t, con
       fd = drv.speed;
       fdd = 0.0;
       break;
-    case DriverProfile::position:
-      ws.driver_expr[d].eval_derivatives(t, f, fd, fdd);
+    case DriverProfile::position: {
+      double v[3];  // f, ḟ, f̈
+      ws.driver_expr[d].eval_derivatives(t, v);
+      f = v[0], fd = v[1], fdd = v[2];
       break;
+    }
     case DriverProfile::speed: {
-      double fddd;
-      ws.driver_expr[d].eval_derivatives(t, fd, fdd, fddd);
+      double v[2];  // ḟ, f̈
+      ws.driver_expr[d].eval_derivatives(t, v);
+      fd = v[0], fdd = v[1];
       f = y[ws.aux_driver[d]];
       break;
     }
