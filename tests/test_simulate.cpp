@@ -228,6 +228,30 @@ solver: {end_time: 2e-3, output_interval: 1e-4, initial_state: given}
   }
 }
 
+TEST(Failure, ANonFiniteExpressionStopsWithAStatusNamingIt) {
+  // sqrt(2e-3 − t) is NaN from t = 2 ms on: the run stops there naming the expression (a force
+  // load and a driver's speed profile), not with an anonymous step-size underflow.
+  const std::string load = R"Y(
+gravity: [0, 0]
+bodies:
+  block: {mass: 2.0, inertia: 1e-3}
+loads:
+  push: {type: force, point: block, fx: "sqrt(2e-3 - time)", fy: "0"}
+solver: {end_time: 4e-3, output_interval: 1e-4, initial_state: given}
+)Y";
+  std::string driven = read_file(example_path("flores_slider_crank_ideal.yaml"));
+  driven.replace(driven.find("speed_rpm: 5000"), 15, "speed: \"523.6 + sqrt(2e-3 - time)\"");
+  for (const std::string& yaml : {load, driven}) {
+    const SimRun r = run_text(yaml, {"solver.end_time=4e-3"});
+    const RunStatus& st = r.result.status;
+    ASSERT_FALSE(st.ok);
+    EXPECT_NE(st.message.find("sqrt(2e-3 - time)"), std::string::npos) << st.message;
+    EXPECT_NE(st.message.find("not finite"), std::string::npos) << st.message;
+    EXPECT_GE(st.t, 2e-3 - 1e-9);
+    EXPECT_LT(st.t, 2.1e-3);
+  }
+}
+
 TEST(Examples, LuGreAndAbsorberExamplesRunWithTheirEnergyBalance) {
   // The two examples that use the newer elements run as shipped (the absorber one shortened to
   // two revolutions), keep energy + dissipation − input constant, and show what their comments

@@ -129,11 +129,15 @@ Expression::Expression(Expression&&) noexcept = default;
 Expression& Expression::operator=(Expression&&) noexcept = default;
 
 double Expression::eval() const {
+  double v;
   try {
-    return impl_->parser.Eval();
+    v = impl_->parser.Eval();
   } catch (const mu::Parser::exception_type& e) {  // mu::ParserError: no std::exception
     throw ExpressionError(text_, *time_, e.GetMsg());
   }
+  // A NaN or infinity would only show up later as a step-size underflow with no culprit.
+  if (!std::isfinite(v)) throw ExpressionError(text_, *time_, "the value is not finite (" + std::to_string(v) + ")");
+  return v;
 }
 
 void Expression::eval_derivatives(double t, double* out) const {
@@ -152,6 +156,12 @@ void Expression::eval_derivatives(double t, double* out) const {
     throw ExpressionError(text_, t, e.GetMsg());
   }
   *time_ = saved;
+  for (int k = 0; k <= n_derivatives_; ++k)
+    if (!std::isfinite(out[k]))
+      throw ExpressionError(text_, t,
+                            k == 0 ? std::string("the value is not finite")
+                                   : "its time derivative of order " + std::to_string(k) +
+                                         " is not finite");
 }
 
 std::string check_expression(const std::string& text, const std::vector<std::string>& body_names,
@@ -160,8 +170,7 @@ std::string check_expression(const std::string& text, const std::vector<std::str
   vars.body_names = body_names;
   try {
     Expression e(text, vars, time_derivatives);
-    const double v = e.eval();
-    if (!std::isfinite(v)) return "evaluates to " + std::to_string(v) + " at time 0";
+    e.eval();  // throws ExpressionError if the value at time 0 is not finite
   } catch (const std::exception& e) {
     return e.what();
   }
