@@ -41,7 +41,7 @@ inline std::string model_invariant_violation(const Model& m) {
   for (const Body& b : m.bodies) {
     const std::string at = "body '" + b.name + "': ";
     if (!(finite(b.mass) && b.mass > 0)) return at + "mass not finite and > 0";
-    if (!(finite(b.inertia) && b.inertia > 0)) return at + "inertia not finite and > 0";
+    if (b.rotates() && !(finite(b.inertia) && b.inertia > 0)) return at + "inertia not finite and > 0";
     if (!finite2(b.r0) || !finite(b.phi0) || !finite2(b.v0) || !finite(b.omega0))
       return at + "initial pose or velocity not finite";
     for (const Marker& mk : b.markers)
