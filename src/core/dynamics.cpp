@@ -75,14 +75,14 @@ bool cholesky_solve(Eigen::MatrixXd& w, const std::vector<int>& first, const Eig
   return true;
 }
 
-void load_body_state(Workspace& ws, const double* y) {
+/// The bodies' state as load expressions read it (`<body>.x` …), from ws.kin.
+void load_body_state(Workspace& ws) {
   for (int b = 0; b < ws.nb; ++b) {
     const BodyKin& k = ws.kin[b];
     double* s = &ws.vars.body_state[6 * b];
     s[0] = k.r.x(), s[1] = k.r.y(), s[2] = k.phi;
     s[3] = k.v.x(), s[4] = k.v.y(), s[5] = k.omega;
   }
-  (void)y;
 }
 
 }  // namespace
@@ -93,18 +93,23 @@ int Model::clearance_joint_count() const {
   return n;
 }
 
+/// Pose and velocity of a body from y into k (whose block is set).
+inline void read_kin(BodyKin& k, int nq, const double* y) {
+  const BodyBlock& bl = k.block;
+  k.r = Vec2(y[bl.offset], y[bl.offset + 1]);
+  k.v = Vec2(y[nq + bl.offset], y[nq + bl.offset + 1]);
+  if (bl.rot >= 0) {
+    k.phi = y[bl.rot];
+    k.omega = y[nq + bl.rot];
+    k.A = rotation(k.phi);
+  }
+}
+
 BodyKin body_kin(const Workspace& ws, int b, const double* y) {
   BodyKin k;
   if (b == kGround) return k;
-  const BodyBlock& bl = ws.blocks[b];
-  k.block = bl;
-  k.r = Vec2(y[bl.offset], y[bl.offset + 1]);
-  k.v = Vec2(y[ws.nq + bl.offset], y[ws.nq + bl.offset + 1]);
-  if (bl.rot >= 0) {
-    k.phi = y[bl.rot];
-    k.omega = y[ws.nq + bl.rot];
-    k.A = rotation(k.phi);
-  }
+  k.block = ws.blocks[b];
+  read_kin(k, ws.nq, y);
   return k;
 }
 
@@ -128,17 +133,7 @@ std::vector<std::string> state_names(const Model& model, const Workspace& ws) {
 
 void update_kin(Workspace& ws, const double* y) {
   // In place: the blocks were set once by the Workspace; only pose and velocity change.
-  for (int b = 0; b < ws.nb; ++b) {
-    BodyKin& k = ws.kin[b];
-    const BodyBlock& bl = k.block;
-    k.r = Vec2(y[bl.offset], y[bl.offset + 1]);
-    k.v = Vec2(y[ws.nq + bl.offset], y[ws.nq + bl.offset + 1]);
-    if (bl.rot >= 0) {
-      k.phi = y[bl.rot];
-      k.omega = y[ws.nq + bl.rot];
-      k.A = rotation(k.phi);
-    }
-  }
+  for (BodyKin& k : ws.kin) read_kin(k, ws.nq, y);
 }
 
 Workspace::Workspace(const Model& model) {
@@ -258,7 +253,7 @@ bool evaluate(const Model& model, Workspace& ws, double t, const double* y, doub
   const int nq = ws.nq;
   update_kin(ws, y);
   ws.vars.time = t;
-  if (ws.loads_use_state) load_body_state(ws, y);
+  if (ws.loads_use_state) load_body_state(ws);
 
   // Applied forces: gravity, then loads, then clearance contacts.
   ws.g.setZero();
