@@ -25,9 +25,9 @@ test: build
 # optimised build and the plain builds do not.
 test-sanitize: deps
 	@cmake -S . -B build-sanitize -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DLASH_SANITIZE=ON -DLASH_BENCH=OFF >/dev/null
-	@LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp cmake --build build-sanitize -j $(JOBS)
+	@LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp:print_suppressions=0 cmake --build build-sanitize -j $(JOBS)
 	cd build-sanitize && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
-	  LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp ctest --output-on-failure -j $(JOBS)
+	  LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp:print_suppressions=0 ctest --output-on-failure -j $(JOBS)
 
 # The code that runs on several threads (concurrent simulations, FFTW planning) under
 # ThreadSanitizer: only test_threads and test_signal are built and run, in build-tsan/.
