@@ -33,26 +33,6 @@ MAX_FRAMES = 600    # animation frames (contract: <= ~600)
 SENSORS = {"acc1.a": ("slider.ax", "m/s²", "accelerometer acc1 on the slider"),
            "load_cell.x": ("slider_guide.F", "N", "guide load cell force")}
 
-# Stand-in units for the channels of a summary.json that predates channel units (an engine
-# without them): the fixture plays the engine's part so that the page sees a complete
-# channel_info. Used only where summary.json gives no unit, with a note on stderr; the page and
-# tools/lash_figures.py never guess units from names. Remove once every engine writes them.
-STAND_IN_UNITS = {
-    "x": ("m", "position along x"), "y": ("m", "position along y"), "phi": ("rad", "angle"),
-    "vx": ("m/s", "velocity along x"), "vy": ("m/s", "velocity along y"),
-    "omega": ("rad/s", "angular velocity"), "ax": ("m/s²", "acceleration along x"),
-    "ay": ("m/s²", "acceleration along y"), "alpha": ("rad/s²", "angular acceleration"),
-    "Fx": ("N", "reaction force along x"), "Fy": ("N", "reaction force along y"),
-    "F": ("N", "reaction force magnitude"), "ex": ("m", "eccentricity along x"),
-    "ey": ("m", "eccentricity along y"), "e": ("m", "eccentricity"),
-    "delta": ("m", "penetration"), "delta_dot": ("m/s", "penetration rate"),
-    "Fn": ("N", "normal contact force"), "Ft": ("N", "friction force"),
-    "vt": ("m/s", "slip velocity"), "mode": ("", "contact mode (1 in contact)"),
-    "torque": ("N·m", "driving torque"), "force": ("N", "driving force"),
-    "kinetic": ("J", "kinetic energy"), "potential": ("J", "potential energy"),
-    "dissipated": ("J", "dissipated energy"), "input": ("J", "input work"),
-    "balance": ("J", "energy balance"), "violation": ("", "largest constraint residual"),
-}
 
 
 # --- a small YAML subset reader: block maps, flow maps/lists, scalars, comments ----------------
@@ -360,10 +340,10 @@ def lyapunov_stand_in(t, cols, joint, period, interval):
 
 
 def channel_info(summary, names):
-    """{name: {"unit", "description"}} for every channel: summary.json's, the sensors', else the
-    stand-ins (noted on stderr)."""
+    """{name: {"unit", "description"}} for every channel: the sensors', else summary.json's (the
+    engine writes a unit and description for every channel it outputs)."""
     described = summary.get("channels") if isinstance(summary.get("channels"), dict) else {}
-    info, stand_ins = {}, []
+    info = {}
     for name in names:
         entry = described.get(name)
         if name in SENSORS:
@@ -371,12 +351,8 @@ def channel_info(summary, names):
         elif isinstance(entry, dict) and isinstance(entry.get("unit"), str):
             unit, description = entry["unit"], entry.get("description") or name
         else:
-            unit, description = STAND_IN_UNITS.get(name.rpartition(".")[2], ("", name))
-            stand_ins.append(name)
+            sys.exit(f"make_sample_data: summary.json gives no unit for channel '{name}'")
         info[name] = {"unit": unit, "description": description}
-    if stand_ins:
-        print(f"make_sample_data: summary.json gives no unit for {len(stand_ins)} channel(s) "
-              f"(an engine without channel units): stand-ins used", file=sys.stderr)
     return info
 
 
