@@ -131,9 +131,9 @@ RunFigures run_lash(const lash::Model& model, Series& s) {
 
 RunFigures run_lash_csv(const lash::LoadedModel& loaded, const std::string& folder) {
   lash::Workspace ws(loaded.model);
-  lash::ResultsWriter writer(loaded.model, folder);
+  lash::ResultsWriter writer(loaded.model, folder, loaded.resolved_yaml);
   const lash::RunResult r = lash::simulate(loaded.model, ws, writer);
-  writer.finish(r, loaded.resolved_yaml, {});
+  writer.finish(r);
   return {r.status.ok, r.status.message, r.stats, ws.rhs_evaluations};
 }
 

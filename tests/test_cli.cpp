@@ -1,13 +1,16 @@
 // The lash command as a user runs it: exit codes, messages, output files.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "test_support.hpp"
 
@@ -48,6 +51,29 @@ size_t line_count(const fs::path& p) {
   for (std::string l; std::getline(in, l);) ++n;
   return n;
 }
+
+/// Every row of a CSV has the header's number of fields (no row cut by a failure).
+void expect_whole_rows(const fs::path& csv) {
+  std::ifstream in(csv);
+  std::string header, line;
+  ASSERT_TRUE(std::getline(in, header)) << csv;
+  const auto fields = std::count(header.begin(), header.end(), ',');
+  long n = 0;
+  while (std::getline(in, line)) {
+    ++n;
+    ASSERT_EQ(std::count(line.begin(), line.end(), ','), fields) << csv << " row " << n << ": " << line;
+  }
+  in.clear();
+  in.seekg(-1, std::ios::end);
+  char last = 0;
+  in.get(last);
+  EXPECT_EQ(last, '\n') << csv << " ends mid-row";
+}
+
+nlohmann::json read_summary(const fs::path& dir) {
+  return nlohmann::json::parse(std::ifstream(dir / "summary.json"));
+}
+
 
 }  // namespace
 
@@ -318,29 +344,39 @@ TEST(Cli, TuneAbsorberSnippetLoadsWhenPasted) {
 }
 
 TEST(Cli, ExpressionFailingMidRunExitsOneWithASummary) {
-  // A load valid at t = 0 that muparser cannot evaluate from t = 1 ms on: exit 1 with the
-  // results so far, not an abort (134) on an uncaught mu::ParserError.
+  // Loads valid at t = 0 that muparser cannot evaluate later (a step whose bounds cross: at
+  // t = 1 ms, or once the block has moved 0.1 mm, a bound that depends on the state), with both
+  // integrators: exit 1 with the results so far and a summary saying "failed", not an abort
+  // (134) on an uncaught mu::ParserError.
   const fs::path dir = temp_dir("expr");
   fs::create_directories(dir);
-  const std::string text = "step(time, 0, 0, 1e-3 - time, 1)";
-  std::ofstream(dir / "expr.yaml") << "gravity: [0, 0]\n"
-                                      "bodies:\n  block: {mass: 2.0, inertia: 1e-3}\n"
-                                      "loads:\n  push: {type: force, point: block, fx: \""
-                                   << text
-                                   << "\", fy: \"0\"}\n"
-                                      "solver: {end_time: 2e-3, output_interval: 1e-4, "
-                                      "initial_state: given}\n";
-  const fs::path out = dir / "out";
-  const Result r = run_lash("run " + (dir / "expr.yaml").string() + " -q -o " + out.string());
-  EXPECT_EQ(r.code, 1) << r.out;
-  EXPECT_NE(r.out.find("simulation stopped at t = "), std::string::npos) << r.out;
-  EXPECT_NE(r.out.find("expression '" + text + "'"), std::string::npos) << r.out;
-  ASSERT_TRUE(fs::exists(out / "summary.json")) << r.out;
-  const auto j = nlohmann::json::parse(std::ifstream(out / "summary.json"));
-  EXPECT_FALSE(j["status"]["ok"].get<bool>());
-  EXPECT_GE(j["status"]["time"].get<double>(), 1e-3);
-  EXPECT_NE(j["status"]["message"].get<std::string>().find(text), std::string::npos);
-  EXPECT_GT(line_count(out / "timeseries.csv"), 2u);
+  for (const std::string text : {"step(time, 0, 0, 1e-3 - time, 1)", "1 + step(time, 0, 0, 1e-4 - block.x, 1)"}) {
+    std::ofstream(dir / "expr.yaml") << "gravity: [0, 0]\n"
+                                        "bodies:\n  block: {mass: 2.0, inertia: 1e-3}\n"
+                                        "loads:\n  push: {type: force, point: block, fx: \""
+                                     << text
+                                     << "\", fy: \"0\"}\n"
+                                        "solver: {end_time: 0.05, output_interval: 1e-4, "
+                                        "initial_state: given}\n";
+    for (const char* integrator : {"dopri5", "bdf"}) {
+      const fs::path out = dir / "out";
+      const Result r = run_lash("run " + (dir / "expr.yaml").string() + " -q -o " + out.string() +
+                                " --set solver.integrator=" + integrator);
+      SCOPED_TRACE(text + " with " + integrator);
+      EXPECT_EQ(r.code, 1) << r.out;
+      EXPECT_NE(r.out.find("simulation stopped at t = "), std::string::npos) << r.out;
+      EXPECT_NE(r.out.find("expression '" + text + "'"), std::string::npos) << r.out;
+      ASSERT_TRUE(fs::exists(out / "summary.json")) << r.out;
+      const auto j = read_summary(out);
+      EXPECT_EQ(j["status"]["outcome"], "failed");
+      EXPECT_FALSE(j["status"]["ok"].get<bool>());
+      EXPECT_GE(j["status"]["time"].get<double>(), 1e-3);
+      EXPECT_LT(j["status"]["time"].get<double>(), 0.05);
+      EXPECT_NE(j["status"]["message"].get<std::string>().find(text), std::string::npos);
+      EXPECT_GT(line_count(out / "timeseries.csv"), 2u);
+      expect_whole_rows(out / "timeseries.csv");
+    }
+  }
   fs::remove_all(dir);
 }
 
@@ -389,25 +425,190 @@ TEST(Cli, RunContinuesFromASavedStateTimeAndAll) {
   fs::remove_all(dir);
 }
 
+
 TEST(Cli, ASignalStopsTheRunAndKeepsSummaryAndState) {
-  // SIGTERM one second into a long run: the run stops at its next output, writes summary.json
-  // (ok false, "interrupted") and final_state.json, and exits 128 + 15; the CSV ends on a whole row.
+  // SIGTERM, then SIGINT, one second into a long run: the run stops at its next output, writes
+  // summary.json (outcome "interrupted") and final_state.json, and exits 130; every CSV row is
+  // whole. The folder held a completed run before: its summary must not survive.
   const fs::path dir = temp_dir("signal");
-  const Result r = run_lash_raw("timeout --preserve-status -s TERM 1 " + std::string(LASH_BINARY) + " run " +
+  ASSERT_EQ(run_lash("run " + example() + " -q -o " + dir.string() + " --set solver.end_time=0.002").code, 0);
+  ASSERT_EQ(read_summary(dir)["status"]["outcome"], "completed");
+  for (const char* sig : {"TERM", "INT"}) {
+    const Result r = run_lash_raw("timeout --preserve-status -s " + std::string(sig) + " 1 " +
+                                  std::string(LASH_BINARY) + " run " + example() + " -q -o " +
+                                  dir.string() + " --set solver.end_time=5");
+    EXPECT_EQ(r.code, 130) << sig << "\n" << r.out;
+    EXPECT_NE(r.out.find("interrupted at t = "), std::string::npos) << r.out;
+    const auto summary = read_summary(dir);
+    EXPECT_EQ(summary["status"]["outcome"], "interrupted");
+    EXPECT_FALSE(summary["status"]["ok"].get<bool>());
+    EXPECT_NE(summary["status"]["message"].get<std::string>().find("interrupted by signal"),
+              std::string::npos);
+    ASSERT_TRUE(fs::exists(dir / "final_state.json"));
+    const auto state = nlohmann::json::parse(std::ifstream(dir / "final_state.json"));
+    EXPECT_GT(state["t"].get<double>(), 0.0);
+    EXPECT_LT(state["t"].get<double>(), 5.0);
+    expect_whole_rows(dir / "timeseries.csv");
+    expect_whole_rows(dir / "events.csv");
+    EXPECT_EQ(summary["integrator"]["outputs"].get<long>() + 1,
+              static_cast<long>(line_count(dir / "timeseries.csv")));
+  }
+  // kill -9 cannot be caught: no summary at all rather than the earlier run's, and whole rows.
+  const Result r = run_lash_raw("timeout -s KILL 1 " + std::string(LASH_BINARY) + " run " +
                                 example() + " -q -o " + dir.string() + " --set solver.end_time=5");
-  EXPECT_EQ(r.code, 143) << r.out;
-  const auto summary = nlohmann::json::parse(std::ifstream(dir / "summary.json"));
-  EXPECT_FALSE(summary["status"]["ok"].get<bool>());
-  EXPECT_NE(summary["status"]["message"].get<std::string>().find("interrupted by signal 15"),
-            std::string::npos);
-  ASSERT_TRUE(fs::exists(dir / "final_state.json"));
-  const auto state = nlohmann::json::parse(std::ifstream(dir / "final_state.json"));
-  EXPECT_GT(state["t"].get<double>(), 0.0);
-  EXPECT_LT(state["t"].get<double>(), 5.0);
-  std::ifstream ts(dir / "timeseries.csv");
-  std::string header, line, last;
-  std::getline(ts, header);
-  while (std::getline(ts, line)) last = line;
-  EXPECT_EQ(std::count(last.begin(), last.end(), ','), std::count(header.begin(), header.end(), ','));
+  EXPECT_NE(r.code, 0);
+  EXPECT_FALSE(fs::exists(dir / "summary.json")) << "a stale summary beside new rows";
+  EXPECT_FALSE(fs::exists(dir / "final_state.json"));
+  expect_whole_rows(dir / "timeseries.csv");
   fs::remove_all(dir);
+}
+
+TEST(Cli, AWriteErrorStopsTheRunWithExitThreeAndWholeRows) {
+  // A 200-block file-size limit: the CSV cannot hold the run. Exit 3, the rows before the
+  // failure whole, summary.json (written last, small) says write_error and counts the rows.
+  const fs::path dir = temp_dir("ulimit");
+  const Result r = run_lash_raw("ulimit -f 200; " + std::string(LASH_BINARY) + " run " + example() +
+                                " -q -o " + dir.string() + " --set solver.end_time=0.1");
+  EXPECT_EQ(r.code, 3) << r.out;
+  EXPECT_NE(r.out.find("timeseries.csv: write failed after"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("File too large"), std::string::npos) << r.out;
+  const auto summary = read_summary(dir);
+  EXPECT_EQ(summary["status"]["outcome"], "write_error");
+  EXPECT_FALSE(summary["status"]["ok"].get<bool>());
+  EXPECT_LT(summary["status"]["time"].get<double>(), 0.1);
+  expect_whole_rows(dir / "timeseries.csv");
+  expect_whole_rows(dir / "events.csv");
+  EXPECT_EQ(summary["integrator"]["outputs"].get<long>() + 1,
+            static_cast<long>(line_count(dir / "timeseries.csv")));
+  // An output folder that cannot be made (a character device): exit 3, named.
+  const Result dev = run_lash("run " + example() + " -q -o /dev/full");
+  EXPECT_EQ(dev.code, 3) << dev.out;
+  EXPECT_NE(dev.out.find("/dev/full: cannot create the output folder"), std::string::npos) << dev.out;
+  fs::remove_all(dir);
+}
+
+TEST(Cli, AFullDiskIsAWriteError) {
+  // A real full file system: a 256 KiB tmpfs in a private mount namespace (needs the right to
+  // mount; skipped otherwise). The results are copied out before the namespace ends.
+  const fs::path dir = temp_dir("fulldisk");
+  fs::create_directories(dir / "mnt");
+  fs::create_directories(dir / "kept");
+  const std::string script =
+      "mount -t tmpfs -o size=256k tmpfs '" + (dir / "mnt").string() + "' || exit 99; '" +
+      std::string(LASH_BINARY) + "' run '" + example() + "' -q -o '" + (dir / "mnt" / "out").string() +
+      "' --set solver.end_time=0.1; rc=\\$?; cp '" + (dir / "mnt" / "out").string() + "'/* '" +
+      (dir / "kept").string() + "'/; exit \\$rc";
+  const Result r = run_lash_raw("unshare -m sh -c \"" + script + "\" 2>&1");
+  if (r.code == 99 || r.out.find("unshare failed") != std::string::npos ||
+      r.out.find("Operation not permitted") != std::string::npos)
+    GTEST_SKIP() << "cannot mount a tmpfs here: " << r.out;
+  EXPECT_EQ(r.code, 3) << r.out;
+  EXPECT_NE(r.out.find("No space left on device"), std::string::npos) << r.out;
+  const auto summary = read_summary(dir / "kept");
+  EXPECT_EQ(summary["status"]["outcome"], "write_error");
+  expect_whole_rows(dir / "kept" / "timeseries.csv");
+  EXPECT_EQ(summary["integrator"]["outputs"].get<long>() + 1,
+            static_cast<long>(line_count(dir / "kept" / "timeseries.csv")));
+  fs::remove_all(dir);
+}
+
+TEST(Cli, OutputFolderNamesRunNoCommands) {
+  // Quotes, spaces and $(...) in the folder's name: the figures step starts Python without a
+  // shell, so nothing runs and the figures are drawn.
+  const fs::path dir = temp_dir("names");
+  fs::create_directories(dir);
+  const std::string name = "it's a $(touch PWNED2) x';touch PWNED;'";
+  const fs::path out = dir / name;
+  const Result r = run_lash_raw("cd '" + dir.string() + "' && " + std::string(LASH_BINARY) +
+                                " run " + example() + " -q --report --set solver.end_time=0.003 -o \"" +
+                                "it's a \\$(touch PWNED2) x';touch PWNED;'\"");
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_TRUE(fs::exists(out / "summary.json")) << r.out;
+  EXPECT_TRUE(fs::exists(out / "report.html"));
+  EXPECT_FALSE(fs::exists(dir / "PWNED"));
+  EXPECT_FALSE(fs::exists(dir / "PWNED2"));
+  if (fs::exists("/usr/bin/python3") && std::system("/usr/bin/python3 -c 'import matplotlib' 2>/dev/null") == 0) {
+    EXPECT_NE(r.out.find("figures failed"), 0u);
+    EXPECT_TRUE(fs::exists(out / "figures")) << lash::test::read_file((out / "figures.log").string());
+  }
+  fs::remove_all(dir);
+}
+
+TEST(Cli, AFolderHoldsOneRunAtATime) {
+  const fs::path dir = temp_dir("twice");
+  // The first run holds the folder for seconds; the second is refused with exit 2 and names it.
+  FILE* first = popen((std::string(LASH_BINARY) + " run " + example() + " -q -o " + dir.string() +
+                       " --set solver.end_time=0.5 2>&1").c_str(), "r");
+  ASSERT_NE(first, nullptr);
+  for (int i = 0; i < 200 && !fs::exists(dir / "timeseries.csv"); ++i) usleep(10000);
+  const Result second = run_lash("run " + example() + " -q -o " + dir.string() + " --set solver.end_time=0.001");
+  const Result analyze = run_lash("analyze " + dir.string());
+  const int status = pclose(first);
+  EXPECT_EQ(WEXITSTATUS(status), 0);
+  EXPECT_EQ(second.code, 2) << second.out;
+  EXPECT_NE(second.out.find("is in use by another lash (process "), std::string::npos) << second.out;
+  EXPECT_EQ(analyze.code, 2) << analyze.out;
+  // The first run's results are whole and its own.
+  const auto summary = read_summary(dir);
+  EXPECT_EQ(summary["status"]["outcome"], "completed");
+  EXPECT_EQ(summary["solver"]["end_time"].get<double>(), 0.5);
+  EXPECT_EQ(summary["integrator"]["outputs"].get<long>() + 1,
+            static_cast<long>(line_count(dir / "timeseries.csv")));
+  // Continuing a run into its own folder would replace the state being read: refused.
+  const Result same = run_lash("run " + example() + " -q -o " + dir.string() + " --set solver.end_time=0.6 --from " +
+                               (dir / "final_state.json").string());
+  EXPECT_EQ(same.code, 2) << same.out;
+  EXPECT_NE(same.out.find("whose files this run replaces"), std::string::npos) << same.out;
+  EXPECT_EQ(read_summary(dir)["solver"]["end_time"].get<double>(), 0.5);
+  fs::remove_all(dir);
+}
+
+TEST(Cli, AnalysisOptionsAreRangeChecked) {
+  const fs::path dir = temp_dir("options");
+  ASSERT_EQ(run_lash("run " + example() + " -q -o " + dir.string() + " --set solver.end_time=0.003").code, 0);
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"analyze --window 5,1", "--window 5,1: T0 must be less than T1"},
+      {"report --window nan,1", "--window nan,1: both times must be finite numbers"},
+      {"analyze --discard -1", "--discard -1: expected a whole number of periods"},
+      {"analyze --lyapunov --lyapunov-d0 nan", "--lyapunov-d0 nan: expected a separation > 0 m"},
+      {"analyze --plane slider.x=nan", "value 'nan' is not a finite number"},
+      {"report --angle-range 0,inf", "--angle-range 0,inf: both angles must be finite"}};
+  for (const auto& [args, message] : cases) {
+    const auto space = args.find(' ');
+    const Result r = run_lash(args.substr(0, space) + " " + dir.string() + args.substr(space));
+    EXPECT_EQ(r.code, 2) << args << "\n" << r.out;
+    EXPECT_NE(r.out.find(message), std::string::npos) << args << "\n" << r.out;
+  }
+  EXPECT_FALSE(fs::exists(dir / "analysis.json"));
+  EXPECT_FALSE(fs::exists(dir / "report.html"));
+  fs::remove_all(dir);
+}
+
+TEST(Cli, ADamagedRunFolderIsNamedNotReported) {
+  const fs::path dir = temp_dir("damaged");
+  ASSERT_EQ(run_lash("run " + example() + " -q -o " + dir.string() + " --set solver.end_time=0.003").code, 0);
+  // An edited model: the report would describe a run that never happened.
+  const std::string model = lash::test::read_file((dir / "model_resolved.yaml").string());
+  std::ofstream(dir / "model_resolved.yaml") << model << "# edited\n";
+  Result r = run_lash("report " + dir.string());
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("model_resolved.yaml: differs from the model this run used"), std::string::npos) << r.out;
+  std::ofstream(dir / "model_resolved.yaml") << model;
+  // A cut summary.json.
+  const std::string summary = lash::test::read_file((dir / "summary.json").string());
+  std::ofstream(dir / "summary.json") << summary.substr(0, summary.size() / 2);
+  r = run_lash("analyze " + dir.string());
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("summary.json: damaged (not valid JSON"), std::string::npos) << r.out;
+  EXPECT_FALSE(fs::exists(dir / "report.html"));
+  EXPECT_FALSE(fs::exists(dir / "analysis.json"));
+  fs::remove_all(dir);
+}
+
+TEST(Cli, SpecialFilesAreNotReadAsModels) {
+  for (const std::string path : {"/dev/zero", "/dev/null"}) {
+    const Result r = run_lash("check " + path);
+    EXPECT_EQ(r.code, 2) << path << "\n" << r.out;
+    EXPECT_NE(r.out.find(path + ": cannot read the model file: not a regular file"), std::string::npos) << r.out;
+  }
 }

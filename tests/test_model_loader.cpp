@@ -364,3 +364,58 @@ solver: {end_time: 1}
   ASSERT_EQ(d.size(), 1u);
   EXPECT_EQ(d[0].str(), "model.yaml:5:10: load 'twist': body 'bob' is a point mass: it takes no torque");
 }
+
+TEST(ModelLoader, DuplicateKeysAndNamesAreErrorsWithBothPlaces) {
+  // Two joints named `pin`: yaml-cpp keeps both, a lookup would take the first silently.
+  auto d = problems(with("  guide: {type", "  pin: {type: revolute, journal: rod.B, bearing: slider}\n  guide: {type"));
+  ASSERT_EQ(d.size(), 1u);
+  EXPECT_EQ(d[0].str(), "model.yaml:29:3: duplicate key 'pin' (first at line 19, column 3); each key "
+                        "and each element name may appear once in a map");
+  // A repeated key inside an element.
+  d = problems(with("  end_time: 0.024", "  end_time: 0.024\n  end_time: 0.048"));
+  ASSERT_EQ(d.size(), 1u);
+  EXPECT_EQ(d[0].line, 34);
+  EXPECT_NE(d[0].message.find("duplicate key 'end_time' (first at line 33, column 3)"), std::string::npos);
+}
+
+TEST(ModelLoader, TextMustBeUtf8AndOneDocument) {
+  // A Latin-1 'é' (0xE9) in a comment on line 2, column 17.
+  auto d = problems(with("gravity: [0, -9.81]", "gravity: [0, -9.81] # \xE9t\xE9"));
+  ASSERT_EQ(d.size(), 1u);
+  EXPECT_EQ(d[0].str(), "model.yaml:2:23: not UTF-8 text (byte 0xE9); save the model file with UTF-8 encoding");
+  // Valid UTF-8 (the same text encoded properly) loads; an overlong '/' (0xC0 0xAF) does not.
+  EXPECT_TRUE(problems(with("gravity: [0, -9.81]", "gravity: [0, -9.81] # \xC3\xA9t\xC3\xA9")).empty());
+  EXPECT_EQ(problems(std::string(kGood) + "# \xC0\xAF\n").size(), 1u);
+  // An override that is not UTF-8.
+  d = problems(kGood, {"name=\xFF"});
+  ASSERT_EQ(d.size(), 1u);
+  EXPECT_NE(d[0].message.find("not UTF-8"), std::string::npos);
+  // A second document after the model.
+  d = problems(std::string(kGood) + "---\nname: other\n");
+  ASSERT_EQ(d.size(), 1u);
+  EXPECT_EQ(d[0].line, 36);
+  EXPECT_NE(d[0].message.find("a second YAML document"), std::string::npos);
+}
+
+TEST(ModelLoader, TheNumberOfOutputsIsBoundedBeforeRunning) {
+  auto d = problems(with("output_interval: 1.0e-5", "output_interval: 1e-300"));
+  ASSERT_EQ(d.size(), 1u);
+  EXPECT_EQ(d[0].line, 34);
+  EXPECT_NE(d[0].message.find("end_time / output_interval = 2.4e+298 outputs, more than max_outputs = 2000000"),
+            std::string::npos) << d[0].message;
+  // 2.4e7 outputs: refused by default, accepted when max_outputs is raised on purpose.
+  EXPECT_EQ(problems(with("output_interval: 1.0e-5", "output_interval: 1.0e-9")).size(), 1u);
+  EXPECT_TRUE(problems(with("output_interval: 1.0e-5", "output_interval: 1.0e-9\n  max_outputs: 3.0e7")).empty());
+  EXPECT_EQ(problems(kGood, {"solver.max_outputs=0.5"}).size(), 1u);
+}
+
+TEST(ModelLoader, OnlyRegularFilesOfBoundedSizeAreRead) {
+  try {
+    load_model_file("/dev/zero");
+    FAIL() << "/dev/zero loaded";
+  } catch (const ModelError& e) {
+    ASSERT_EQ(e.diagnostics().size(), 1u);
+    EXPECT_EQ(e.diagnostics()[0].str(),
+              "/dev/zero: cannot read the model file: not a regular file (expected a text file)");
+  }
+}

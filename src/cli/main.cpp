@@ -1,19 +1,20 @@
 // lash: the command-line front end. `lash run MODEL -o OUT` simulates; `lash check MODEL`
-// validates. Exit codes: 0 success, 1 numerical failure or I/O error, 2 bad model or options.
+// validates. Exit codes: 0 success, 1 numerical failure, 2 bad model or options, 3 I/O error
+// (results could not be written), 130 interrupted by a signal.
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 #include <signal.h>
 #include <unistd.h>
 
-#include <atomic>
-
 #include <algorithm>
+#include <atomic>
 #include <chrono>
-#include <fstream>
 #include <filesystem>
 #include <iostream>
+#include <memory>
 
 #include "cli/tune_absorber.hpp"
+#include "io/files.hpp"
 #include "io/model_loader.hpp"
 #include "io/report.hpp"
 #include "io/results_writer.hpp"
@@ -34,6 +35,7 @@ class ProgressObserver : public lash::Observer {
   void event(const lash::ContactEvent& e, const lash::Workspace& ws) override {
     if (w_) w_->event(e, ws);
   }
+  std::string stop_reason() const override { return w_ ? w_->stop_reason() : std::string(); }
   void progress(double t, double t_end) override {
     if (!show_) return;
     const auto now = std::chrono::steady_clock::now();
@@ -64,6 +66,52 @@ void install_signal_handlers() {
   sa.sa_flags = SA_RESETHAND;
   sigemptyset(&sa.sa_mask);
   for (int sig : {SIGINT, SIGTERM, SIGHUP}) sigaction(sig, &sa, nullptr);
+}
+
+// Exit codes (README, docs/model-format.md).
+constexpr int kExitOk = 0;
+constexpr int kExitNumerical = 1;   ///< the run stopped: step-size underflow, NaN, an expression
+constexpr int kExitBadInput = 2;    ///< bad model, options or state file; nothing was run
+constexpr int kExitIo = 3;          ///< results could not be written (full disk, size limit, ...)
+constexpr int kExitInterrupted = 130;
+
+int exit_code(lash::RunOutcome o) {
+  switch (o) {
+    case lash::RunOutcome::completed: return kExitOk;
+    case lash::RunOutcome::failed: return kExitNumerical;
+    case lash::RunOutcome::interrupted: return kExitInterrupted;
+    case lash::RunOutcome::write_error: return kExitIo;
+  }
+  return kExitNumerical;
+}
+
+/// A run folder about to be read by `report` or `analyze`: it must hold model_resolved.yaml, and
+/// when the run's summary.json is there, the model in it must be the one in model_resolved.yaml
+/// (an edited model would give a report of a run that never happened). Returns "" or the problem.
+std::string check_run_folder(const std::string& dir) {
+  namespace fs = std::filesystem;
+  const std::string model = dir + "/model_resolved.yaml", summary = dir + "/summary.json";
+  if (!fs::exists(model)) return model + ": missing: not a folder written by `lash run`";
+  if (!fs::exists(summary)) return "";  // a run killed before its end: the model alone is enough
+  nlohmann::json j;
+  std::string model_text;
+  try {
+    j = nlohmann::json::parse(lash::read_input_file(summary, lash::kMaxModelFileBytes));
+    model_text = lash::read_input_file(model, lash::kMaxModelFileBytes);
+  } catch (const nlohmann::json::exception& e) {
+    return summary + ": damaged (not valid JSON: " + e.what() + "); run the model again";
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  const auto* resolved = j.is_object() && j.contains("model") && j["model"].is_object() &&
+                                 j["model"].contains("resolved") && j["model"]["resolved"].is_string()
+                             ? &j["model"]["resolved"]
+                             : nullptr;
+  if (!resolved) return summary + ": damaged (no model.resolved); run the model again";
+  if (resolved->get<std::string>() + "\n" != model_text)
+    return model + ": differs from the model this run used (summary.json model.resolved): edited "
+                   "after the run? Run the edited model with `lash run` instead";
+  return "";
 }
 
 int report_model_error(const lash::ModelError& e) {
@@ -161,13 +209,30 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 2;
   }
+  // Past a file-size limit (ulimit -f) a write then fails with EFBIG and is reported (exit 3)
+  // instead of the process being killed with a half-written row.
+  ::signal(SIGXFSZ, SIG_IGN);
   if (tune_absorber.parsed()) return tune_absorber.run(std::cout, std::cerr);
 
+  std::unique_ptr<lash::FolderLock> folder_lock;  // report/analyze: no run writes meanwhile
   if (*report || *analyze) {
     model_path = run_dir + "/model_resolved.yaml";
-    if (!std::filesystem::exists(model_path)) {
-      std::cerr << run_dir << ": no model_resolved.yaml: not a folder written by `lash run`\n";
-      return 2;
+    if (!std::filesystem::exists(model_path)) {  // before the lock file is made
+      std::cerr << "error: " << model_path << ": missing: not a folder written by `lash run`\n";
+      return kExitBadInput;
+    }
+    try {
+      folder_lock = std::make_unique<lash::FolderLock>(run_dir);
+    } catch (const lash::IoError& e) {
+      std::cerr << "error: " << e.what() << "\n";
+      return kExitIo;
+    } catch (const std::exception& e) {
+      std::cerr << "error: " << e.what() << "\n";
+      return kExitBadInput;
+    }
+    if (const std::string problem = check_run_folder(run_dir); !problem.empty()) {
+      std::cerr << "error: " << problem << "\n";
+      return kExitBadInput;
     }
   }
   lash::LoadedModel loaded;
@@ -205,16 +270,31 @@ int main(int argc, char** argv) {
       ro.lyapunov_d0 = lyapunov_d0;
       ro.section_planes = planes;
     }
+    install_signal_handlers();
+    ro.interrupt = &g_interrupt;
+    try {
+      lash::check_options(ro);
+    } catch (const std::invalid_argument& e) {
+      std::cerr << "error: " << e.what() << "\n";
+      return kExitBadInput;
+    }
     try {
       ProgressObserver progress(nullptr, isatty(STDERR_FILENO));
       const lash::RunAnalysis ra = lash::analyze_run(model, ro, &progress);
       const nlohmann::json data = lash::report_data(model, ra);
+      const int code = exit_code(ra.result.status.outcome);
+      if (code != kExitOk)
+        std::cerr << "the run stopped at t = " << ra.result.status.t
+                  << " s: " << ra.result.status.message << "\n";
+      if (code == kExitInterrupted) return code;  // nothing written
       if (*report) {
         for (const auto& line : lash::write_report(data, run_dir)) std::cout << line << "\n";
-        return ra.result.status.ok ? 0 : 1;
+        return code;
       }
       const auto& an = data["analysis"];
-      std::ofstream(run_dir + "/analysis.json") << an.dump(2) << "\n";
+      lash::write_file_atomic(
+          run_dir + "/analysis.json",
+          an.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
       if (an["poincare"].is_object())
         fmt::print("poincare ({}): {} sections, {} distinct point(s)\n",
                    an["poincare"]["kind"].get<std::string>(), an["poincare"]["points"].size(),
@@ -239,13 +319,16 @@ int main(int argc, char** argv) {
       fmt::print("verdict: {}", an["verdict"]["class"].get<std::string>());
       for (const auto& e : an["verdict"]["evidence"]) fmt::print("; {}", e.get<std::string>());
       fmt::print("\nwrote {}/analysis.json\n", run_dir);
-      return ra.result.status.ok ? 0 : 1;
+      return code;
+    } catch (const lash::IoError& e) {
+      std::cerr << "error: " << e.what() << "\n";
+      return kExitIo;
     } catch (const std::invalid_argument& e) {
       std::cerr << "error: " << e.what() << "\n";
-      return 2;
+      return kExitBadInput;
     } catch (const std::exception& e) {
       std::cerr << "error: " << e.what() << "\n";
-      return 1;
+      return kExitNumerical;
     }
   }
 
@@ -255,6 +338,19 @@ int main(int argc, char** argv) {
     std::cerr << "error: --report analyses a whole run from t = 0; run without --from to get a "
                  "report, or report on the earlier run's folder\n";
     return 2;
+  }
+  if (!from_state.empty()) {
+    // The state file would be replaced by the new run's before it is read to the end, and the
+    // run it came from lost: continue into another folder.
+    namespace fs = std::filesystem;
+    std::error_code e1, e2;
+    const fs::path from_dir = fs::weakly_canonical(fs::absolute(from_state).parent_path(), e1);
+    const fs::path to_dir = fs::weakly_canonical(fs::absolute(out_dir), e2);
+    if (!e1 && !e2 && from_dir == to_dir) {
+      std::cerr << "error: --from " << from_state << " is in the output folder " << out_dir
+                << ", whose files this run replaces; continue into another folder (-o)\n";
+      return kExitBadInput;
+    }
   }
   lash::RunOptions run_options;
   install_signal_handlers();
@@ -268,57 +364,88 @@ int main(int argc, char** argv) {
         throw std::runtime_error(from_state + ": " + why);
     } catch (const std::exception& e) {
       std::cerr << "error: " << e.what() << "\n";
-      return 2;
+      return kExitBadInput;
     }
     run_options.from = &start;
   }
+  std::unique_ptr<lash::FolderLock> lock;
+  std::unique_ptr<lash::ResultsWriter> writer;
+  try {
+    lock = std::make_unique<lash::FolderLock>(out_dir);
+    writer = std::make_unique<lash::ResultsWriter>(model, out_dir, loaded.resolved_yaml, overrides,
+                                                   from_state);
+  } catch (const lash::IoError& e) {
+    std::cerr << "error: " << e.what() << "\n";
+    return kExitIo;
+  } catch (const std::exception& e) {  // the folder is another run's
+    std::cerr << "error: " << e.what() << "\n";
+    return kExitBadInput;
+  }
+  lash::RunResult result;
+  lash::RunAnalysis ra;
   try {
     lash::Workspace ws(model);
-    lash::ResultsWriter writer(model, out_dir);
-    lash::RunResult result;
-    lash::RunAnalysis ra;
-    try {
-      if (with_report) {
-        ProgressObserver progress(&writer, !quiet && isatty(STDERR_FILENO));
-        ra = lash::analyze_run(model, lash::AnalysisOptions{}, &progress);
-        result = ra.result;
-      } else {
-        ProgressObserver observer(&writer, !quiet && isatty(STDERR_FILENO));
-        result = lash::simulate(model, ws, observer, {}, {}, run_options);
-      }
-    } catch (const std::runtime_error& e) {  // no consistent initial state
-      std::cerr << model_path << ": " << e.what() << "\n";
-      return 2;
+    ProgressObserver progress(writer.get(), !quiet && isatty(STDERR_FILENO));
+    if (with_report) {
+      lash::AnalysisOptions ao;
+      ao.interrupt = &g_interrupt;
+      ra = lash::analyze_run(model, ao, &progress);
+      result = ra.result;
+    } else {
+      result = lash::simulate(model, ws, progress, {}, {}, run_options);
     }
-    writer.finish(result, loaded.resolved_yaml, overrides, from_state);
-
-    // The report covers what was computed, up to a failure too.
-    std::vector<std::string> report_notes;
-    if (with_report) report_notes = lash::write_report(lash::report_data(model, ra), out_dir);
-    if (!result.status.ok) {
-      for (const auto& line : report_notes) std::cerr << "report: " << line << "\n";
-      if (const int sig = g_interrupt.load(); sig != 0) {
-        std::cerr << "\ninterrupted at t = " << result.status.t << " s; results up to that time, "
-                  << "summary.json and final_state.json are in " << out_dir << "/\n";
-        return 128 + sig;
-      }
-      std::cerr << "\nerror: simulation stopped at t = " << result.status.t << " s"
-                << (result.status.element.empty() ? "" : ", joint '" + result.status.element + "'")
-                << ": " << result.status.message << "\nresults up to that time are in " << out_dir
-                << "/\n";
-      return 1;
-    }
-    if (!quiet)
-      fmt::print("{}: {} outputs to {}/ in {:.3f} s ({} steps, {} rejected, {} rhs evaluations, "
-                 "{} contact events; max constraint violation {:.2e})\n",
-                 model.name, result.outputs, out_dir, result.wall_seconds, result.stats.steps,
-                 result.stats.rejected_steps, result.stats.rhs_evaluations, result.stats.events,
-                 result.max_constraint_violation);
-    for (const auto& line : report_notes)
-      if (!quiet) std::cout << "report: " << line << "\n";
-  } catch (const std::exception& e) {
-    std::cerr << "error: " << e.what() << "\n";
-    return 1;
+  } catch (const std::exception& e) {  // no consistent initial state
+    std::cerr << model_path << ": " << e.what() << "\n";
+    return kExitBadInput;
   }
-  return 0;
+  lash::RunStatus status;
+  try {
+    status = writer->finish(result);
+  } catch (const std::exception& e) {  // summary.json itself
+    std::cerr << "\nerror: " << e.what() << "\nthe run " << lash::outcome_name(result.status.outcome)
+              << " at t = " << result.status.t << " s, but its summary could not be written\n";
+    return kExitIo;
+  }
+  int code = exit_code(status.outcome);
+
+  // The report covers what was computed, up to a failure too (not after a signal or a write error).
+  std::vector<std::string> report_notes;
+  if (with_report && (code == kExitOk || code == kExitNumerical)) {
+    try {
+      report_notes = lash::write_report(lash::report_data(model, ra), out_dir);
+    } catch (const lash::IoError& e) {
+      report_notes.push_back(std::string("not written: ") + e.what());
+      code = kExitIo;
+    }
+  }
+  auto print_notes = [&](std::ostream& os) {
+    for (const auto& line : report_notes) os << "report: " << line << "\n";
+  };
+  switch (status.outcome) {
+    case lash::RunOutcome::completed:
+      if (!quiet)
+        fmt::print("{}: {} outputs to {}/ in {:.3f} s ({} steps, {} rejected, {} rhs evaluations, "
+                   "{} contact events; max constraint violation {:.2e})\n",
+                   model.name, result.outputs, out_dir, result.wall_seconds, result.stats.steps,
+                   result.stats.rejected_steps, result.stats.rhs_evaluations, result.stats.events,
+                   result.max_constraint_violation);
+      if (!quiet || code != kExitOk) print_notes(code == kExitOk ? std::cout : std::cerr);
+      break;
+    case lash::RunOutcome::interrupted:
+      std::cerr << "\ninterrupted at t = " << status.t << " s; results up to that time, "
+                << "summary.json and final_state.json are in " << out_dir << "/\n";
+      break;
+    case lash::RunOutcome::write_error:
+      std::cerr << "\nerror: " << status.message << "\nthe rows written before it (up to t = "
+                << status.t << " s at most) are whole; summary.json in " << out_dir
+                << "/ says what happened\n";
+      break;
+    case lash::RunOutcome::failed:
+      print_notes(std::cerr);
+      std::cerr << "\nerror: simulation stopped at t = " << status.t << " s"
+                << (status.element.empty() ? "" : ", joint '" + status.element + "'") << ": "
+                << status.message << "\nresults up to that time are in " << out_dir << "/\n";
+      break;
+  }
+  return code;
 }

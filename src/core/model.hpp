@@ -161,6 +161,9 @@ struct SolverSettings {
   double output_interval = 1e-3;
   double max_step = 0.0;       ///< 0: no limit
   long max_steps = 50'000'000;
+  /// Upper bound on end_time / output_interval, checked before running: a typo in either cannot
+  /// fill a disk (about 1 GB of CSV at the default for a 30-channel model).
+  long max_outputs = 2'000'000;
   InitialStateRule initial_state = InitialStateRule::ideal;
   double baumgarte_alpha = 100.0;  ///< Φ̈ + 2αΦ̇ + β²Φ = 0, 1/s
   double baumgarte_beta = 100.0;

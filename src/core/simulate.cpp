@@ -9,6 +9,16 @@
 
 namespace lash {
 
+const char* outcome_name(RunOutcome o) {
+  switch (o) {
+    case RunOutcome::completed: return "completed";
+    case RunOutcome::failed: return "failed";
+    case RunOutcome::interrupted: return "interrupted";
+    case RunOutcome::write_error: return "write_error";
+  }
+  return "failed";
+}
+
 namespace {
 
 /// A gap beyond this (m) on the wrong side of a joint's mode is a missed crossing.
@@ -203,10 +213,10 @@ SectionPlane parse_section_plane(const Model& model, const std::string& spec) {
   try {
     size_t used = 0;
     p.value = std::stod(value, &used);
-    if (used != value.size()) throw std::invalid_argument(value);
+    if (used != value.size() || !std::isfinite(p.value)) throw std::invalid_argument(value);
   } catch (const std::exception&) {
     throw std::invalid_argument("section plane '" + spec + "': value '" + value +
-                                "' is not a number");
+                                "' is not a finite number");
   }
   // Indices into y follow the coordinate blocks (rigid: x, y, φ; point mass: x, y).
   int offset = 0, nq = 0;
@@ -344,12 +354,20 @@ RunResult simulate(const Model& model, Workspace& ws, Observer& observer,
       result.status = {false, t_out, "",
                        "interrupted by signal " + std::to_string(options.interrupt->load()) +
                            "; results up to this time are kept, and final_state.json continues "
-                           "the run with --from"};
+                           "the run with --from",
+                       RunOutcome::interrupted};
       ok = false;
+    }
+    if (ok) {
+      if (std::string why = observer.stop_reason(); !why.empty()) {
+        result.status = {false, t_out, "", std::move(why), RunOutcome::write_error};
+        ok = false;
+      }
     }
     ++k;
   }
   if (result.status.ok) result.status.t = s.end_time;  // the time reached
+  else if (result.status.outcome == RunOutcome::completed) result.status.outcome = RunOutcome::failed;
   result.final_state = sim.snapshot();
   result.stats = sim.stats();
   result.missed_events = ws.missed_events;

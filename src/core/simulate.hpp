@@ -45,6 +45,9 @@ class Observer {
   virtual void progress(double /*t*/, double /*t_end*/) {}
   /// Called at every stroboscopic section time (see SectionSchedule); `ws` is evaluated there.
   virtual void section(double /*t*/, const Eigen::VectorXd& /*y*/, const Workspace& /*ws*/) {}
+  /// Checked after every output: a non-empty reason (the results can no longer be written) stops
+  /// the run there with outcome write_error.
+  virtual std::string stop_reason() const { return {}; }
 };
 
 /// Stroboscopic Poincaré sections at t = start + k·period (k ≥ 0), taken from the integrator's
@@ -62,11 +65,16 @@ struct SectionPlane {
   int direction = 1;
 };
 
+/// How a run ended (summary.json `status.outcome`; the CLI's exit code follows it).
+enum class RunOutcome { completed, failed, interrupted, write_error };
+const char* outcome_name(RunOutcome o);
+
 struct RunStatus {
   bool ok = true;
   double t = 0.0;
   std::string element;   ///< the element at fault, if one is
   std::string message;   ///< what happened, with the state that shows it
+  RunOutcome outcome = RunOutcome::completed;  ///< failed whenever !ok, unless more is known
 };
 
 struct RunResult {

@@ -2,17 +2,23 @@
 
 #include "core/finalize.hpp"
 
+#include <yaml-cpp/eventhandler.h>
 #include <yaml-cpp/yaml.h>
 
+#include <fmt/format.h>
+
 #include <cmath>
+#include <cstdint>
 #include <fstream>
 #include <functional>
 #include <map>
 #include <optional>
 #include <regex>
 #include <sstream>
+#include <string_view>
 
 #include "core/expression.hpp"
+#include "io/files.hpp"
 
 namespace lash {
 
@@ -873,7 +879,7 @@ class Loader {
   void read_solver(Model& m, const YAML::Node& n, const YAML::Node& root) {
     Section s(r_, n, root, "solver",
               {"integrator", "rtol", "atol", "end_time", "output_interval", "max_step",
-               "max_steps", "initial_state", "baumgarte"});
+               "max_steps", "max_outputs", "initial_state", "baumgarte"});
     SolverSettings& st = m.solver;
     if (auto integ = s.text("integrator")) {
       if (*integ == "dopri5") st.integrator = IntegratorKind::dopri5;
@@ -903,10 +909,22 @@ class Loader {
       st.baumgarte_alpha = b.number("alpha", " (1/s)", non_negative).value_or(st.baumgarte_alpha);
       st.baumgarte_beta = b.number("beta", " (1/s)", non_negative).value_or(st.baumgarte_beta);
     }
-    if (st.output_interval > st.end_time)
+    if (auto mo = s.number("max_outputs", "", [](double v) {
+          return v >= 1 && v <= 1e12 && v == std::floor(v) ? "" : "a whole number in [1, 1e12]";
+        }))
+      st.max_outputs = static_cast<long>(*mo);
+    if (st.output_interval > st.end_time) {
       r_.error(s.get("output_interval"), "solver",
                "output_interval must be <= end_time, got " + fmt_num(st.output_interval) +
                    " > " + fmt_num(st.end_time));
+    } else if (const double n = st.end_time / st.output_interval;
+               !(n <= static_cast<double>(st.max_outputs))) {
+      r_.error(s.has("output_interval") ? s.get("output_interval") : s.get("end_time"), "solver",
+               "end_time / output_interval = " + fmt_num(n) + " outputs, more than max_outputs = " +
+                   std::to_string(st.max_outputs) +
+                   "; choose a longer output_interval, or raise solver.max_outputs if the disk "
+                   "can take it");
+    }
   }
 
   Reporter r_;
@@ -985,6 +1003,105 @@ void apply_override(YAML::Node root, const std::string& spec, Reporter& r) {
   node[keys.back()] = override_value(value);
 }
 
+/// Every key that appears twice in one map, with both places (yaml-cpp keeps both, and a lookup
+/// would silently take the first). Read from the parser's events, where an alias is one event:
+/// no node is visited twice, so self-referencing and exponential aliases cost nothing.
+class DuplicateKeyFinder : public YAML::EventHandler {
+ public:
+  explicit DuplicateKeyFinder(Reporter& r) : r_(r) {}
+  void OnDocumentStart(const YAML::Mark&) override {}
+  void OnDocumentEnd() override {}
+  void OnNull(const YAML::Mark& m, YAML::anchor_t) override { done(m, nullptr); }
+  void OnAlias(const YAML::Mark& m, YAML::anchor_t) override { done(m, nullptr); }
+  void OnScalar(const YAML::Mark& m, const std::string&, YAML::anchor_t,
+                const std::string& value) override {
+    done(m, &value);
+  }
+  void OnSequenceStart(const YAML::Mark& m, const std::string&, YAML::anchor_t,
+                       YAML::EmitterStyle::value) override {
+    stack_.push_back({false, true, m, {}});
+  }
+  void OnSequenceEnd() override { close(); }
+  void OnMapStart(const YAML::Mark& m, const std::string&, YAML::anchor_t,
+                  YAML::EmitterStyle::value) override {
+    stack_.push_back({true, true, m, {}});
+  }
+  void OnMapEnd() override { close(); }
+
+ private:
+  struct Frame {
+    bool is_map;
+    bool expect_key;
+    YAML::Mark start;
+    std::map<std::string, YAML::Mark> keys;
+  };
+  void close() {
+    const YAML::Mark m = stack_.back().start;
+    stack_.pop_back();
+    done(m, nullptr);
+  }
+  /// A node ended at `m`; `key` is its text when it is a scalar.
+  void done(const YAML::Mark& m, const std::string* key) {
+    if (stack_.empty() || !stack_.back().is_map) return;
+    Frame& f = stack_.back();
+    if (f.expect_key && key) {
+      const auto [it, fresh] = f.keys.emplace(*key, m);
+      if (!fresh)
+        r_.list.push_back({r_.file, m.line + 1, m.column + 1, "",
+                           "duplicate key '" + *key + "' (first at line " +
+                               std::to_string(it->second.line + 1) + ", column " +
+                               std::to_string(it->second.column + 1) +
+                               "); each key and each element name may appear once in a map"});
+    }
+    f.expect_key = !f.expect_key;
+  }
+  Reporter& r_;
+  std::vector<Frame> stack_;
+};
+
+void report_duplicate_keys(const std::string& text, Reporter& r) {
+  std::istringstream in(text);
+  YAML::Parser parser(in);
+  DuplicateKeyFinder finder(r);
+  while (parser.HandleNextDocument(finder)) {
+  }
+}
+
+/// The first byte sequence that is not UTF-8 (overlong forms, surrogates and code points above
+/// U+10FFFF included), with its line and column (1-based, in bytes).
+struct BadByte {
+  int line = 1, column = 1;
+  std::size_t offset = 0;
+  std::string byte;  ///< "0xC3"
+};
+std::optional<BadByte> first_invalid_utf8(std::string_view s) {
+  int line = 1, column = 1;
+  for (std::size_t i = 0; i < s.size();) {
+    const auto c = static_cast<unsigned char>(s[i]);
+    std::size_t n = 0;
+    std::uint32_t cp = 0;
+    if (c < 0x80) n = 1, cp = c;
+    else if ((c & 0xE0) == 0xC0) n = 2, cp = c & 0x1F;
+    else if ((c & 0xF0) == 0xE0) n = 3, cp = c & 0x0F;
+    else if ((c & 0xF8) == 0xF0) n = 4, cp = c & 0x07;
+    bool ok = n > 0 && i + n <= s.size();
+    for (std::size_t k = 1; ok && k < n; ++k) {
+      const auto cc = static_cast<unsigned char>(s[i + k]);
+      ok = (cc & 0xC0) == 0x80;
+      cp = (cp << 6) | (cc & 0x3F);
+    }
+    if (ok) {
+      static const std::uint32_t min_cp[5] = {0, 0, 0x80, 0x800, 0x10000};
+      ok = cp >= min_cp[n] && cp <= 0x10FFFF && !(cp >= 0xD800 && cp <= 0xDFFF);
+    }
+    if (!ok) return BadByte{line, column, i, fmt::format("0x{:02X}", c)};
+    if (c == '\n') ++line, column = 1;
+    else ++column;
+    i += n;
+  }
+  return std::nullopt;
+}
+
 LoadedModel load_root(YAML::Node root, const std::string& filename,
                       const std::vector<std::string>& overrides) {
   Reporter over;
@@ -1003,12 +1120,34 @@ LoadedModel load_root(YAML::Node root, const std::string& filename,
 
 LoadedModel load_model_text(const std::string& text, const std::string& filename,
                             const std::vector<std::string>& overrides) {
+  if (auto bad = first_invalid_utf8(text))
+    throw ModelError({{filename, bad->line, bad->column, "",
+                       "not UTF-8 text (byte " + bad->byte +
+                           "); save the model file with UTF-8 encoding"}});
+  for (const auto& o : overrides)
+    if (auto bad = first_invalid_utf8(o))
+      throw ModelError({{"--set", 0, 0, "", "not UTF-8 text (byte " + bad->byte + ") in '" +
+                                                 std::string(o.begin(), o.begin() + bad->offset) +
+                                                 "...'"}});
   YAML::Node root;
   try {
-    root = YAML::Load(text);
+    const std::vector<YAML::Node> docs = YAML::LoadAll(text);
+    if (docs.size() > 1) {
+      const YAML::Mark m = docs[1].Mark();
+      throw ModelError({{filename, m.line >= 0 ? m.line + 1 : 0, m.line >= 0 ? m.column + 1 : 0, "",
+                         "a second YAML document ('---'): a model file holds one model; split "
+                         "it into two files"}});
+    }
+    if (!docs.empty()) root = docs.front();
   } catch (const YAML::Exception& e) {
     throw ModelError({{filename, e.mark.line + 1, e.mark.column + 1, "",
                        "not valid YAML: " + e.msg}});
+  }
+  {
+    Reporter dup;
+    dup.file = filename;
+    report_duplicate_keys(text, dup);
+    if (!dup.list.empty()) throw ModelError(dup.list);
   }
   if (!root.IsMap())
     throw ModelError({{filename, 1, 1, "",
@@ -1018,11 +1157,15 @@ LoadedModel load_model_text(const std::string& text, const std::string& filename
 }
 
 LoadedModel load_model_file(const std::string& path, const std::vector<std::string>& overrides) {
-  std::ifstream in(path);
-  if (!in) throw ModelError({{path, 0, 0, "", "cannot open the model file"}});
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return load_model_text(ss.str(), path, overrides);
+  std::string text;
+  try {
+    text = read_input_file(path, kMaxModelFileBytes);
+  } catch (const std::exception& e) {
+    std::string what = e.what();
+    if (what.rfind(path + ": ", 0) == 0) what.erase(0, path.size() + 2);
+    throw ModelError({{path, 0, 0, "", "cannot read the model file: " + what}});
+  }
+  return load_model_text(text, path, overrides);
 }
 
 }  // namespace lash

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "io/files.hpp"
 #include "report_assets.hpp"
 
 namespace lash {
@@ -234,10 +235,12 @@ json report_data(const Model& model, const RunAnalysis& a) {
 std::vector<std::string> write_report(const json& data, const std::string& folder) {
   namespace fs = std::filesystem;
   std::vector<std::string> notes;
-  fs::create_directories(folder);
-  const std::string text = data.dump();
-  std::ofstream(folder + "/report_data.json") << text << "\n";
-  notes.push_back(folder + "/report_data.json");
+  std::error_code ec;
+  fs::create_directories(folder, ec);
+  if (ec) throw IoError(folder, "cannot create the folder: " + ec.message());
+  const std::string text = data.dump(-1, ' ', false, json::error_handler_t::replace);
+  write_file_atomic(folder + "/report_data.json", text + "\n");
+  notes.push_back("wrote " + folder + "/report_data.json");
   // The page: the template with the data inlined. Every '<' (only possible inside JSON strings:
   // model names, paths, expressions) becomes \u003c, so no text can close or reopen the script.
   std::string escaped;
@@ -252,23 +255,21 @@ std::vector<std::string> write_report(const json& data, const std::string& folde
   const std::string token = "__LASH_REPORT_DATA__";
   const auto pos = html.find(token);
   if (pos != std::string::npos) html.replace(pos, token.size(), escaped);
-  std::ofstream(folder + "/report.html") << html;
-  notes.push_back(folder + "/report.html");
-  // Figures for papers, with Debian's matplotlib.
+  write_file_atomic(folder + "/report.html", html);
+  notes.push_back("wrote " + folder + "/report.html");
+  // Figures for papers, with Debian's matplotlib; started without a shell, so no folder name can
+  // run a command.
   const std::string script = std::string(LASH_SOURCE_DIR) + "/tools/lash_figures.py";
-  const char* python = "/usr/bin/python3";
+  const std::string python = "/usr/bin/python3";
   if (!fs::exists(script) || !fs::exists(python)) {
     notes.push_back("figures skipped: " + script + " or " + python + " not found");
   } else {
-    const std::string cmd = std::string(python) + " '" + script + "' '" + folder + "' > '" +
-                            folder + "/figures.log' 2>&1";
-    const int rc = std::system(cmd.c_str());
-    notes.push_back(rc == 0 ? folder + "/figures/ (see figures.log)"
+    const int rc = run_program({python, script, folder}, folder + "/figures.log");
+    notes.push_back(rc == 0 ? "wrote " + folder + "/figures/ (see figures.log)"
                             : "figures failed (exit " + std::to_string(rc) + "), see " + folder +
                                   "/figures.log");
   }
   return notes;
 }
-
 
 }  // namespace lash

@@ -12,23 +12,47 @@
 
 namespace lash {
 
-ResultsWriter::ResultsWriter(const Model& model, const std::string& folder)
-    : model_(model), folder_(folder) {
+const std::vector<std::string>& ResultsWriter::run_files() {
+  // summary.json first: from here on, no summary of the earlier run stands beside new rows.
+  static const std::vector<std::string> files = {
+      "summary.json", "final_state.json", "timeseries.csv", "events.csv", "model_resolved.yaml",
+      "analysis.json", "report_data.json", "report.html", "figures.log", "figures"};
+  return files;
+}
+
+ResultsWriter::ResultsWriter(const Model& model, const std::string& folder,
+                             const std::string& resolved_yaml, std::vector<std::string> overrides,
+                             std::string from)
+    : model_(model), folder_(folder), resolved_yaml_(resolved_yaml),
+      overrides_(std::move(overrides)), from_(std::move(from)) {
   std::error_code ec;
   std::filesystem::create_directories(folder, ec);
-  ts_ = std::fopen((folder + "/timeseries.csv").c_str(), "w");
-  ev_ = std::fopen((folder + "/events.csv").c_str(), "w");
-  if (!ts_ || !ev_)
-    throw std::runtime_error("cannot write results to '" + folder + "'" +
-                             (ec ? ": " + ec.message() : std::string()));
+  if (ec) throw IoError(folder, "cannot create the output folder: " + ec.message());
+  for (const auto& f : run_files()) {
+    std::filesystem::remove_all(folder + "/" + f, ec);
+    if (ec) throw IoError(folder + "/" + f, "cannot remove the earlier run's file: " + ec.message());
+  }
+  write_file_atomic(folder + "/model_resolved.yaml", resolved_yaml_ + "\n");
+  ts_ = RowFile(folder + "/timeseries.csv");
+  ev_ = RowFile(folder + "/events.csv");
   channels_ = channel_info(model, Workspace(model));
   values_.assign(channels_.size(), 0.0);
   peaks_.assign(channels_.size(), Peak{});
   joints_.assign(model.clearance_joint_count(), JointStats{});
-  std::fputs("time", ts_);
-  for (const auto& c : channels_) fmt::print(ts_, ",{}", c.name);
-  std::fputc('\n', ts_);
-  std::fputs("time,joint,event,velocity\n", ev_);
+  std::string header = "time";
+  for (const auto& c : channels_) header += "," + c.name;
+  write_rows(ts_, header + "\n");
+  write_rows(ev_, "time,joint,event,velocity\n");
+}
+
+void ResultsWriter::write_rows(RowFile& file, std::string_view rows) {
+  if (!file.is_open()) return;  // this file failed earlier
+  try {
+    file.append(rows);
+  } catch (const IoError& e) {
+    if (write_error_.empty()) write_error_ = e.what();
+    file.abandon();
+  }
 }
 
 void ResultsWriter::append_number(double v) {
@@ -37,12 +61,8 @@ void ResultsWriter::append_number(double v) {
   row_.append(buf, r.ptr);
 }
 
-ResultsWriter::~ResultsWriter() {
-  if (ts_) std::fclose(ts_);
-  if (ev_) std::fclose(ev_);
-}
-
 void ResultsWriter::output(double t, const Eigen::VectorXd& y, const Workspace& ws) {
+  if (!write_error_.empty()) return;  // the run stops at this output
   channel_values(model_, ws, y, values_.data());
   // One buffered row, one write; std::to_chars (%.9g, identical bytes) is ~1.6x faster than
   // fmt's precision formatting, which dominated `lash run` on small models.
@@ -57,19 +77,20 @@ void ResultsWriter::output(double t, const Eigen::VectorXd& y, const Workspace& 
     if (rows_ == 0 || v > p.max) p.max = v, p.t_max = t;
   }
   row_.push_back('\n');
-  std::fwrite(row_.data(), 1, row_.size(), ts_);
+  write_rows(ts_, std::string_view(row_.data(), row_.size()));
   if (rows_ == 0) {
     t_first_ = t;
     for (int k = 0; k < ws.nc; ++k)
       if (ws.contact[k].in_contact) joints_[k].in_contact = true, joints_[k].onset_time = t;
   }
-  if (++rows_ % 512 == 0) std::fflush(ts_);
+  ++rows_;
   t_last_ = t;
 }
 
 void ResultsWriter::event(const ContactEvent& e, const Workspace& ws) {
   const std::string& name = model_.joints[ws.clearance_joints[e.clearance]].name;
-  fmt::print(ev_, "{:.12g},{},{},{:.9g}\n", e.t, name, e.onset ? "onset" : "separation", e.velocity);
+  write_rows(ev_, fmt::format("{:.12g},{},{},{:.9g}\n", e.t, name,
+                              e.onset ? "onset" : "separation", e.velocity));
   JointStats& s = joints_[e.clearance];
   if (e.onset) {
     ++s.impacts;
@@ -83,14 +104,36 @@ void ResultsWriter::event(const ContactEvent& e, const Workspace& ws) {
   }
 }
 
-void ResultsWriter::finish(const RunResult& r, const std::string& resolved_yaml,
-                           const std::vector<std::string>& overrides, const std::string& from) {
+RunStatus ResultsWriter::finish(const RunResult& r) {
   using nlohmann::json;
-  std::fflush(ts_);
-  std::fflush(ev_);
+  RunStatus status = r.status;
+  for (RowFile* f : {&ts_, &ev_}) {  // each keeps its whole rows, whatever the other's fate
+    try {
+      f->close();
+    } catch (const IoError& e) {
+      if (write_error_.empty()) write_error_ = e.what();
+    }
+  }
+  if (r.final_state.y.size() > 0) {
+    try {
+      write_state(folder_ + "/final_state.json", model_, Workspace(model_), r.final_state);
+    } catch (const std::exception& e) {
+      if (write_error_.empty()) write_error_ = e.what();
+    }
+  }
+  if (!write_error_.empty() && status.outcome != RunOutcome::write_error) {
+    // The run itself may have ended well or not; the results on disk are incomplete either way.
+    const std::string before = status.ok ? std::string() : " (the run had stopped: " + status.message + ")";
+    status.ok = false;
+    status.outcome = RunOutcome::write_error;
+    status.message = "results could not be written: " + write_error_ + before;
+  }
   json j;
-  j["status"] = {{"ok", r.status.ok}, {"time", r.status.t}, {"element", r.status.element},
-                 {"message", r.status.message}};
+  j["status"] = {{"outcome", outcome_name(status.outcome)},
+                 {"ok", status.ok},
+                 {"time", status.t},
+                 {"element", status.element},
+                 {"message", status.message}};
   const double span = t_last_ - t_first_;
   json channels = json::object();
   for (size_t i = 0; i < channels_.size(); ++i) {
@@ -128,18 +171,18 @@ void ResultsWriter::finish(const RunResult& r, const std::string& resolved_yaml,
                      {"rhs_evaluations", r.stats.rhs_evaluations},
                      {"events", r.stats.events},
                      {"wall_seconds", r.wall_seconds},
-                     {"outputs", r.outputs}};
+                     {"outputs", std::max(0LL, ts_.rows_written() - 1)}};
   j["max_constraint_violation"] = r.max_constraint_violation;
-  j["start"] = {{"time", t_first_}, {"from", from.empty() ? nlohmann::json() : json(from)}};
+  j["start"] = {{"time", t_first_}, {"from", from_.empty() ? nlohmann::json() : json(from_)}};
   j["integrator"]["missed_events"] = r.missed_events;
   const SolverSettings& s = model_.solver;
   j["model"] = {{"name", model_.name},
                 {"file", model_.source},
-                {"overrides", overrides},
+                {"overrides", overrides_},
                 {"bodies", model_.bodies.size()},
                 {"joints", model_.joints.size()},
                 {"clearance_joints", model_.clearance_joint_count()},
-                {"resolved", resolved_yaml}};
+                {"resolved", resolved_yaml_}};
   j["solver"] = {{"integrator", s.integrator == IntegratorKind::bdf ? "bdf" : "dopri5"},
                  {"rtol", s.rtol},
                  {"atol", s.atol},
@@ -149,13 +192,9 @@ void ResultsWriter::finish(const RunResult& r, const std::string& resolved_yaml,
                  {"initial_state", s.initial_state == InitialStateRule::ideal ? "ideal" : "given"},
                  {"baumgarte_alpha", s.baumgarte_alpha},
                  {"baumgarte_beta", s.baumgarte_beta}};
-  std::ofstream(folder_ + "/summary.json") << j.dump(2) << "\n";
-  std::ofstream(folder_ + "/model_resolved.yaml") << resolved_yaml << "\n";
-  if (r.final_state.y.size() > 0)
-    write_state(folder_ + "/final_state.json", model_, Workspace(model_), r.final_state);
-  std::fclose(ts_);
-  std::fclose(ev_);
-  ts_ = ev_ = nullptr;
+  write_file_atomic(folder_ + "/summary.json",
+                    j.dump(2, ' ', false, json::error_handler_t::replace) + "\n");
+  return status;
 }
 
 }  // namespace lash

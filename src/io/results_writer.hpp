@@ -3,32 +3,42 @@
 /// Streams a run's results into an output folder: timeseries.csv (one column per channel
 /// `<element>.<quantity>`), events.csv (contact onsets and separations) and summary.json
 /// (per-channel peaks, per-joint contact statistics, integrator statistics, model and settings).
-/// Rows are flushed as they come, so a failed run keeps everything written before the failure.
+/// A run folder holds one run: the outputs of an earlier run are removed first (summary.json
+/// before anything else, so no stale summary ever stands beside new rows). Rows reach the disk
+/// whole (io/files.hpp RowFile); a failed write stops the run (Observer::stop_reason) with the
+/// rows before it intact, and summary.json, written last and atomically, says what happened.
 #include <fmt/format.h>
 
-#include <cstdio>
 #include <string>
 #include <vector>
 
 #include "core/elements/registry.hpp"
 #include "core/simulate.hpp"
+#include "io/files.hpp"
 
 namespace lash {
 
 class ResultsWriter : public Observer {
  public:
-  /// Creates `folder` if needed; throws std::runtime_error if it cannot be written.
-  ResultsWriter(const Model& model, const std::string& folder);
-  ~ResultsWriter() override;
+  /// Creates `folder` if needed, removes an earlier run's outputs and writes model_resolved.yaml
+  /// (`resolved_yaml`, the model as run). `overrides` are the --set values; `from` names the
+  /// state file the run continues from ("" for a run from t = 0). Throws IoError.
+  ResultsWriter(const Model& model, const std::string& folder, const std::string& resolved_yaml,
+                std::vector<std::string> overrides = {}, std::string from = "");
 
   void output(double t, const Eigen::VectorXd& y, const Workspace& ws) override;
   void event(const ContactEvent& e, const Workspace& ws) override;
+  /// The first write error, once one happened: the run stops at its next output.
+  std::string stop_reason() const override { return write_error_; }
 
-  /// Writes summary.json (with every channel's unit and description) and final_state.json, and
-  /// closes the files. `resolved_yaml` is the model as run.
-  /// `from` names the state file the run continued from ("" for a run from t = 0).
-  void finish(const RunResult& result, const std::string& resolved_yaml,
-              const std::vector<std::string>& overrides, const std::string& from = "");
+  /// Closes the CSV files, writes final_state.json and, last and atomically, summary.json (with
+  /// every channel's unit and description). Returns the run's status as recorded: `result`'s,
+  /// or write_error if a write failed. Throws IoError only when summary.json itself cannot be
+  /// written.
+  RunStatus finish(const RunResult& result);
+
+  /// Output files of a run, removed before a new run writes into the same folder.
+  static const std::vector<std::string>& run_files();
 
  private:
   struct Peak {
@@ -40,11 +50,15 @@ class ResultsWriter : public Observer {
     bool in_contact = false;
   };
   void append_number(double v);  ///< %.9g into row_
+  void write_rows(RowFile& file, std::string_view rows);  ///< records the first error
 
   const Model& model_;
   std::string folder_;
-  std::FILE* ts_ = nullptr;
-  std::FILE* ev_ = nullptr;
+  std::string resolved_yaml_;
+  std::vector<std::string> overrides_;
+  std::string from_;
+  RowFile ts_, ev_;
+  std::string write_error_;
   std::vector<ChannelInfo> channels_;
   std::vector<double> values_;
   fmt::memory_buffer row_;

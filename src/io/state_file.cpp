@@ -1,5 +1,7 @@
 #include "io/state_file.hpp"
 
+#include "io/files.hpp"
+
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -26,16 +28,7 @@ void write_state(const std::string& path, const Model& model, const Workspace& w
   for (int k = 0; k < ws.nc; ++k)
     modes[model.joints[ws.clearance_joints[k]].name] = state.modes[k].in_contact ? 1 : 0;
   j["modes"] = modes;
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream out(tmp);
-    out << j.dump(1) << "\n";
-    out.flush();
-    if (!out) throw std::runtime_error("cannot write '" + tmp + "'");
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) throw std::runtime_error("cannot write '" + path + "': " + ec.message());
+  write_file_atomic(path, j.dump(1, ' ', false, json::error_handler_t::replace) + "\n");
 }
 
 State read_state(const std::string& path, const Model& model, const Workspace& ws) {
@@ -43,11 +36,15 @@ State read_state(const std::string& path, const Model& model, const Workspace& w
   auto fail = [&](const std::string& what) {
     return std::runtime_error(path + ": " + what);
   };
-  std::ifstream in(path);
-  if (!in) throw fail("cannot open the state file");
+  std::string text;
+  try {
+    text = read_input_file(path, kMaxModelFileBytes);
+  } catch (const std::exception& e) {
+    throw std::runtime_error(e.what());
+  }
   json j;
   try {
-    j = json::parse(in);
+    j = json::parse(text);
   } catch (const json::exception& e) {
     throw fail(std::string("not a valid state file (JSON): ") + e.what());
   }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <memory>
 #include <random>
 #include <stdexcept>
@@ -101,6 +102,7 @@ class Collector : public Observer {
       if (channels[i].name == name) return static_cast<int>(i);
     return -1;
   }
+  std::string stop_reason() const override { return extra_ ? extra_->stop_reason() : std::string(); }
   void output(double t, const Eigen::VectorXd& y, const Workspace& ws) override {
     if (extra_) extra_->output(t, y, ws);
     channel_values(model_, ws, y, v_.data());
@@ -317,12 +319,44 @@ Model ideal_model(const Model& model) {
   return ideal;
 }
 
+namespace {
+std::string fmt_g(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", v);
+  return buf;
+}
+}  // namespace
+
+void check_options(const AnalysisOptions& o) {
+  auto bad = [](const std::string& option, const std::string& what) {
+    throw std::invalid_argument(option + ": " + what);
+  };
+  const bool window = o.stats_t0 > -1e300 || o.stats_t1 < 1e300;
+  if (window) {
+    const std::string w = "--window " + fmt_g(o.stats_t0) + "," + fmt_g(o.stats_t1);
+    if (!std::isfinite(o.stats_t0) || !std::isfinite(o.stats_t1))
+      bad(w, "both times must be finite numbers (s)");
+    if (o.stats_t0 < 0) bad(w, "T0 must be >= 0 s");
+    if (o.stats_t1 <= o.stats_t0) bad(w, "T0 must be less than T1");
+  }
+  if (!std::isnan(o.stats_angle0) || !std::isnan(o.stats_angle1)) {
+    if (!std::isfinite(o.stats_angle0) || !std::isfinite(o.stats_angle1))
+      bad("--angle-range " + fmt_g(o.stats_angle0) + "," + fmt_g(o.stats_angle1),
+          "both angles must be finite numbers (degrees)");
+  }
+  if (o.discard_periods < 0 || o.discard_periods > 1000000)
+    bad("--discard " + std::to_string(o.discard_periods), "expected a whole number of periods in [0, 1e6]");
+  if (!std::isfinite(o.lyapunov_d0) || o.lyapunov_d0 < 0)
+    bad("--lyapunov-d0 " + fmt_g(o.lyapunov_d0), "expected a separation > 0 m (or 0 for the default)");
+}
+
 RunAnalysis analyze_run(const Model& model, const AnalysisOptions& o, Observer* extra) {
   const SolverSettings& s = model.solver;
   const size_t n_out = static_cast<size_t>(std::ceil(s.end_time / s.output_interval - 1e-9)) + 1;
   const size_t bucket = (n_out + o.display_points - 1) / o.display_points;
 
-  // The options first: nothing runs when one of them names what does not exist.
+  // The options first: nothing runs when one of them is out of range or names what does not exist.
+  check_options(o);
   const Driver* drv = period_driver(model, o.poincare_driver);
   if (!o.poincare_driver.empty() && !drv)
     throw std::invalid_argument("--poincare " + o.poincare_driver +
@@ -379,7 +413,9 @@ RunAnalysis analyze_run(const Model& model, const AnalysisOptions& o, Observer* 
   if (o.ideal_twin && model.clearance_joint_count() > 0) {
     Workspace tws(twin_model);
     twin = std::make_unique<Keeper>(twin_model);
-    twin_result = simulate(twin_model, tws, *twin);
+    RunOptions ro;
+    ro.interrupt = o.interrupt;
+    twin_result = simulate(twin_model, tws, *twin, {}, {}, ro);
     if (!twin_result.status.ok) twin.reset();
   }
 
@@ -405,7 +441,10 @@ RunAnalysis analyze_run(const Model& model, const AnalysisOptions& o, Observer* 
   col.fft_data.resize(fft_index.size());
 
   RunAnalysis out;
-  out.result = simulate(model, ws, col, SectionSchedule{planes.empty() ? period : 0.0, 0.0}, planes);
+  RunOptions run_options;
+  run_options.interrupt = o.interrupt;
+  out.result = simulate(model, ws, col, SectionSchedule{planes.empty() ? period : 0.0, 0.0}, planes,
+                        run_options);
   col.dec.flush();
   out.period_driver = drv ? drv->name : std::string();
   out.period = period;

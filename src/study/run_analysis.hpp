@@ -7,6 +7,7 @@
 /// units with channel names, units and descriptions from `channel_info`; turning them into
 /// report_data.json (docs/report-data.md) is io's business (`io/report.hpp`).
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <optional>
 #include <string>
@@ -39,7 +40,14 @@ struct AnalysisOptions {
   /// Statistics only where the crank angle (deg, of the period driver) lies in [a0, a1],
   /// wrapping through 360 when a0 > a1; NaN: everywhere.
   double stats_angle0 = std::nan(""), stats_angle1 = std::nan("");
+  /// Checked at every output of the runs (RunOptions::interrupt): a signal stops them there.
+  const std::atomic<int>* interrupt = nullptr;
 };
+
+/// Throws std::invalid_argument naming the option (as the command line spells it) when one is
+/// out of range: a window with T1 <= T0 or not finite, negative discarded periods, a separation
+/// that is not a finite positive number. analyze_run() calls it first.
+void check_options(const AnalysisOptions& o);
 
 /// Channels on a shared, min/max-decimated time base: each bucket of outputs becomes two points
 /// (its first and last time) carrying each channel's extremes in time order, so impact spikes

@@ -1,0 +1,221 @@
+#include "io/files.hpp"
+
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/file.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+
+extern char** environ;
+
+namespace lash {
+
+namespace {
+
+std::string errno_text(int err) { return std::strerror(err); }
+
+/// write(2) until done; returns 0 or the errno of the failure (a short write followed by a
+/// failing one reports the failure).
+int write_all(int fd, const char* data, std::size_t n) {
+  while (n > 0) {
+    const ssize_t w = ::write(fd, data, n);
+    if (w < 0) {
+      if (errno == EINTR) continue;
+      return errno;
+    }
+    if (w == 0) return EIO;
+    data += w;
+    n -= static_cast<std::size_t>(w);
+  }
+  return 0;
+}
+
+/// fsync of the folder holding `path`, so a rename survives a crash of the machine (best effort:
+/// some file systems refuse to open folders for it).
+void sync_parent(const std::string& path) {
+  std::string dir = std::filesystem::path(path).parent_path().string();
+  if (dir.empty()) dir = ".";
+  const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd < 0) return;
+  ::fsync(fd);
+  ::close(fd);
+}
+
+}  // namespace
+
+IoError::IoError(const std::string& path, const std::string& what)
+    : std::runtime_error(path + ": " + what), path_(path) {}
+
+void write_file_atomic(const std::string& path, std::string_view text) {
+  const std::string tmp = path + ".tmp-" + std::to_string(::getpid());
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) throw IoError(path, "cannot write: " + errno_text(errno));
+  int err = write_all(fd, text.data(), text.size());
+  if (err == 0 && ::fsync(fd) != 0) err = errno;
+  if (::close(fd) != 0 && err == 0) err = errno;
+  if (err == 0 && ::rename(tmp.c_str(), path.c_str()) != 0) err = errno;
+  if (err != 0) {
+    ::unlink(tmp.c_str());
+    throw IoError(path, "cannot write: " + errno_text(err));
+  }
+  sync_parent(path);
+}
+
+RowFile::RowFile(std::string path) : path_(std::move(path)) {
+  fd_ = ::open(path_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd_ < 0) throw IoError(path_, "cannot write: " + errno_text(errno));
+  buffer_.reserve(1 << 16);
+}
+
+RowFile& RowFile::operator=(RowFile&& o) noexcept {
+  if (this != &o) {
+    if (fd_ >= 0) ::close(fd_);
+    path_ = std::move(o.path_);
+    fd_ = o.fd_;
+    buffer_ = std::move(o.buffer_);
+    committed_ = o.committed_;
+    committed_rows_ = o.committed_rows_;
+    o.fd_ = -1;
+  }
+  return *this;
+}
+
+RowFile::~RowFile() {
+  if (fd_ >= 0) ::close(fd_);  // only after an exception: close() reports errors
+}
+
+void RowFile::append(std::string_view rows) {
+  buffer_.append(rows);
+  if (buffer_.size() >= (1u << 16)) flush();
+}
+
+void RowFile::flush() {
+  if (fd_ < 0 || buffer_.empty()) return;
+  const int err = write_all(fd_, buffer_.data(), buffer_.size());
+  if (err != 0) {
+    // Back to the last whole row: a reader never sees half a row, and the file says what was
+    // computed up to there.
+    if (::ftruncate(fd_, committed_) == 0) ::lseek(fd_, committed_, SEEK_SET);
+    buffer_.clear();
+    throw IoError(path_, "write failed after " + std::to_string(committed_) +
+                             " bytes: " + errno_text(err));
+  }
+  committed_ += static_cast<long long>(buffer_.size());
+  committed_rows_ += std::count(buffer_.begin(), buffer_.end(), '\n');
+  buffer_.clear();
+}
+
+void RowFile::close() {
+  if (fd_ < 0) return;
+  try {
+    flush();
+  } catch (...) {
+    abandon();
+    throw;
+  }
+  int err = ::fsync(fd_) != 0 ? errno : 0;
+  // fsync is not supported on every target (a pipe, /dev/full): only a real write error counts.
+  if (err == EINVAL || err == EROFS) err = 0;
+  if (::close(fd_) != 0 && err == 0) err = errno;
+  fd_ = -1;
+  if (err != 0) throw IoError(path_, "cannot close: " + errno_text(err));
+}
+
+void RowFile::abandon() {
+  buffer_.clear();
+  if (fd_ >= 0) ::close(fd_);
+  fd_ = -1;
+}
+
+FolderLock::FolderLock(const std::string& folder) {
+  std::error_code ec;
+  std::filesystem::create_directories(folder, ec);
+  if (ec) throw IoError(folder, "cannot create the output folder: " + ec.message());
+  const std::string path = folder + "/.lash.lock";
+  fd_ = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  if (fd_ < 0) throw IoError(path, "cannot create the lock file: " + errno_text(errno));
+  if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
+    const int err = errno;
+    char pid[32] = {};
+    const ssize_t n = ::pread(fd_, pid, sizeof pid - 1, 0);
+    ::close(fd_);
+    fd_ = -1;
+    if (err == EWOULDBLOCK) {
+      std::string who = n > 0 ? std::string(pid, static_cast<std::size_t>(n)) : std::string();
+      while (!who.empty() && (who.back() == '\n' || who.back() == ' ')) who.pop_back();
+      throw std::invalid_argument("output folder '" + folder + "' is in use by another lash" +
+                                  (who.empty() ? std::string() : " (process " + who + ")") +
+                                  "; wait for it to finish or choose another folder with -o");
+    }
+    throw IoError(path, "cannot lock: " + errno_text(err));
+  }
+  const std::string me = std::to_string(::getpid()) + "\n";
+  if (::ftruncate(fd_, 0) == 0) (void)!::pwrite(fd_, me.data(), me.size(), 0);
+}
+
+FolderLock::~FolderLock() {
+  if (fd_ >= 0) ::close(fd_);  // releases the lock; the file stays (removing it would race)
+}
+
+std::string read_input_file(const std::string& path, std::size_t max_bytes) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) throw IoError(path, "cannot open: " + errno_text(errno));
+  if (!S_ISREG(st.st_mode))
+    throw std::invalid_argument(path + ": not a regular file (expected a text file)");
+  if (static_cast<std::size_t>(st.st_size) > max_bytes)
+    throw std::invalid_argument(path + ": " + std::to_string(st.st_size) +
+                                " bytes, more than the " + std::to_string(max_bytes) +
+                                " bytes an input file may have");
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) throw IoError(path, "cannot open: " + errno_text(errno));
+  std::string text;
+  char buf[1 << 16];
+  for (;;) {
+    const ssize_t n = ::read(fd, buf, sizeof buf);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      const int err = errno;
+      ::close(fd);
+      throw IoError(path, "cannot read: " + errno_text(err));
+    }
+    if (n == 0) break;
+    text.append(buf, static_cast<std::size_t>(n));
+    if (text.size() > max_bytes) {  // grew while being read
+      ::close(fd);
+      throw std::invalid_argument(path + ": more than the " + std::to_string(max_bytes) +
+                                  " bytes an input file may have");
+    }
+  }
+  ::close(fd);
+  return text;
+}
+
+int run_program(const std::vector<std::string>& argv, const std::string& log_path) {
+  if (argv.empty()) return -1;
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, log_path.c_str(),
+                                   O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
+  std::vector<char*> args;
+  for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+  args.push_back(nullptr);
+  pid_t pid = 0;
+  const int rc = ::posix_spawn(&pid, argv[0].c_str(), &actions, nullptr, args.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  if (rc != 0) return -1;
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0)
+    if (errno != EINTR) return -1;
+  if (WIFEXITED(status)) return WEXITSTATUS(status);
+  if (WIFSIGNALED(status)) return 128 + WTERMSIG(status);
+  return -1;
+}
+
+}  // namespace lash

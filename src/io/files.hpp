@@ -1,0 +1,93 @@
+#pragma once
+/// @file files.hpp
+/// File-system primitives that never report success for a failed write: atomic whole-file
+/// writes, an append-only row file that keeps whole rows on a failed write, a run folder owned
+/// by one process, bounded reads of input files, and helper programs started without a shell.
+#include <cstddef>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace lash {
+
+/// A failed read or write, with the path and the system's reason ("No space left on device").
+class IoError : public std::runtime_error {
+ public:
+  IoError(const std::string& path, const std::string& what);
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+};
+
+/// Writes `text` to `path` atomically: a temporary file beside it, written, fsync'ed and renamed
+/// over `path`. On failure `path` is untouched (an earlier version stays, or none) and the
+/// temporary file is removed. Throws IoError.
+void write_file_atomic(const std::string& path, std::string_view text);
+
+/// An output file written in whole rows. Rows are buffered and handed to the kernel in whole
+/// rows, so a killed process leaves only whole rows; a failed or short write (full disk, file
+/// size limit) truncates the file back to its last whole row and throws IoError.
+class RowFile {
+ public:
+  RowFile() = default;
+  /// Creates or truncates `path`. Throws IoError.
+  explicit RowFile(std::string path);
+  RowFile(const RowFile&) = delete;
+  RowFile& operator=(const RowFile&) = delete;
+  RowFile(RowFile&& o) noexcept { *this = std::move(o); }
+  RowFile& operator=(RowFile&& o) noexcept;
+  ~RowFile();
+
+  /// Appends one or more whole rows (ending in '\n'); written out when the buffer is full.
+  void append(std::string_view rows);
+  /// Writes the buffered rows. Throws IoError.
+  void flush();
+  /// Flushes, fsyncs and closes. Throws IoError. Idempotent.
+  void close();
+  /// Closes without writing what is buffered (after an error).
+  void abandon();
+  const std::string& path() const { return path_; }
+  bool is_open() const { return fd_ >= 0; }
+  /// Rows (lines) on disk.
+  long long rows_written() const { return committed_rows_; }
+
+ private:
+  std::string path_;
+  int fd_ = -1;
+  std::string buffer_;
+  long long committed_ = 0;       ///< bytes of whole rows on disk
+  long long committed_rows_ = 0;  ///< lines in them
+};
+
+/// Owns a run folder while a command writes into it: an exclusive lock on FOLDER/.lash.lock
+/// (flock, released when the process ends, however it ends). A second `lash` writing into the
+/// same folder is refused instead of mixing its rows with the first one's.
+class FolderLock {
+ public:
+  /// Creates `folder` if needed and locks it. Throws IoError when it cannot be created, and
+  /// std::invalid_argument naming the other process when another run holds the lock.
+  explicit FolderLock(const std::string& folder);
+  FolderLock(const FolderLock&) = delete;
+  FolderLock& operator=(const FolderLock&) = delete;
+  ~FolderLock();
+
+ private:
+  int fd_ = -1;
+};
+
+/// Reads an input file (model, state, summary) whole. Refuses what is not a regular file
+/// (a directory, /dev/zero, a FIFO) and files larger than `max_bytes`, with std::invalid_argument
+/// naming the path; throws IoError when it cannot be read.
+std::string read_input_file(const std::string& path, std::size_t max_bytes);
+
+/// Largest model file read (bytes): far above any mechanism's description.
+constexpr std::size_t kMaxModelFileBytes = 16u << 20;
+
+/// Runs `argv[0]` (a path) with arguments `argv`, no shell involved, its stdout and stderr into
+/// `log_path`, and waits for it. Returns its exit status (128 + signal if it was killed), or -1
+/// when it could not be started.
+int run_program(const std::vector<std::string>& argv, const std::string& log_path);
+
+}  // namespace lash
