@@ -3,12 +3,15 @@
 /// What fuzz/fuzz_model_loader.cpp and tests/test_fuzz_regressions.cpp both check, so the
 /// fuzzer and the replay of its findings agree on what a bug is:
 ///   - leading `#set KEY=VALUE` lines of an input are overrides (as `lash run --set`);
-///   - a Model the loader accepts is in the ranges core/model.hpp documents.
+///   - a Model the loader accepts is in the ranges core/model.hpp documents;
+///   - a model that assembles also runs, for a bounded effort, to an end that says what happened.
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
 
 #include "core/model.hpp"
+#include "core/simulate.hpp"
 
 namespace lash::fuzz {
 
@@ -105,6 +108,43 @@ inline std::string model_invariant_violation(const Model& m) {
   if (!(finite(s.baumgarte_alpha) && s.baumgarte_alpha >= 0 && finite(s.baumgarte_beta) &&
         s.baumgarte_beta >= 0))
     return "solver: baumgarte not finite and >= 0";
+  return "";
+}
+
+/// Steps and outputs a fuzzed run may take: enough to pass impacts and expression bounds, small
+/// enough for many runs per second.
+constexpr long kRunSteps = 2000;
+constexpr double kRunOutputs = 20;
+
+/// Runs an accepted model that assembles, with at most kRunSteps steps and kRunOutputs outputs,
+/// and returns "" if the run kept its contract (core/simulate.hpp): simulate() returns rather
+/// than throws, a completed run reached end_time, a stopped one is "failed" with a message, and
+/// the final state has the size of the model's state. Else the first violation.
+inline std::string run_contract_violation(Model m) {
+  SolverSettings& s = m.solver;
+  s.max_steps = std::min(s.max_steps, kRunSteps);
+  s.end_time = std::min(s.end_time, kRunOutputs * s.output_interval);
+  struct Null : Observer {
+    void output(double, const Eigen::VectorXd&, const Workspace&) override {}
+  } null;
+  RunResult r;
+  int size = 0;
+  try {
+    Workspace ws(m);
+    size = ws.ny;
+    r = simulate(m, ws, null);
+  } catch (const std::runtime_error&) {
+    return "";  // no consistent initial state: the loader's and initial_state's business
+  } catch (const std::exception& e) {
+    return std::string("simulate threw: ") + e.what();
+  }
+  if (r.status.ok != (r.status.outcome == RunOutcome::completed))
+    return "status.ok and status.outcome disagree";
+  if (r.status.ok && !(r.status.t == s.end_time)) return "completed before end_time";
+  if (!r.status.ok && r.status.outcome != RunOutcome::failed)
+    return std::string("stopped as ") + outcome_name(r.status.outcome) + " with no signal or writer";
+  if (!r.status.ok && r.status.message.empty()) return "stopped without a message";
+  if (r.final_state.y.size() != size) return "final state of the wrong size";
   return "";
 }
 

@@ -5,7 +5,10 @@
 ///   - load_model_text throws lash::ModelError for every bad input, and nothing else;
 ///   - a model it accepts is in the ranges core/model.hpp documents (fuzz_contract.hpp), builds
 ///     a Workspace (which compiles every expression) without throwing,
-///     and initial_state either assembles it or throws std::runtime_error.
+///     and initial_state either assembles it or throws std::runtime_error;
+///   - a model of at most kMaxRunBodies bodies that assembles runs for a bounded effort
+///     (fuzz_contract.hpp run_contract_violation: at most 2000 steps and 20 outputs) and ends
+///     with a status that says what happened.
 /// Any other exception, a crash, a sanitizer report or a hang is a bug; the target aborts on it
 /// so libFuzzer saves the input.
 ///
@@ -36,6 +39,8 @@ constexpr size_t kMaxInputBytes = 64 * 1024;
 // Assembly is a dense Gauss–Newton on 3·bodies unknowns, up to 100 iterations: legitimate but
 // slow work for big models, which would show up as fuzzer timeouts rather than bugs.
 constexpr size_t kMaxAssembledBodies = 64;
+// Runs are bounded in steps, but a step of a big model is slow: run the small ones.
+constexpr size_t kMaxRunBodies = 12;
 
 const bool kVerbose = std::getenv("LASH_FUZZ_VERBOSE") != nullptr;
 
@@ -76,10 +81,12 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   // Stage 3: compile expressions and assemble. runtime_error = "cannot assemble", expected.
   if (model.bodies.size() > kMaxAssembledBodies) return 0;
   if (kVerbose) std::fprintf(stderr, "loaded: %zu bodies\n", model.bodies.size());
+  bool assembled = false;
   try {
     lash::Workspace ws(model);
     try {
       lash::initial_state(model, ws);
+      assembled = true;
       if (kVerbose) std::fprintf(stderr, "assembled\n");
     } catch (const std::runtime_error& e) {
       if (kVerbose) std::fprintf(stderr, "not assembled: %s\n", e.what());
@@ -89,5 +96,19 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   } catch (...) {
     fail("Workspace / initial_state", nullptr);
   }
+
+  // Stage 4: run it, bounded.
+  if (!assembled || model.bodies.size() > kMaxRunBodies) return 0;
+  std::string violation_run;
+  try {
+    violation_run = lash::fuzz::run_contract_violation(model);
+  } catch (...) {
+    fail("simulate", nullptr);
+  }
+  if (!violation_run.empty()) {
+    std::fprintf(stderr, "\n*** fuzz_model_loader: run broke its contract: %s\n", violation_run.c_str());
+    std::abort();
+  }
+  if (kVerbose) std::fprintf(stderr, "ran\n");
   return 0;
 }

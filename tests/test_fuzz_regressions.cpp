@@ -3,7 +3,8 @@
 //   - load_model_text throws lash::ModelError, with at least one diagnostic, and nothing else;
 //   - a model it accepts is in the ranges core/model.hpp documents (fuzz/fuzz_contract.hpp),
 //     builds a Workspace without throwing, and initial_state assembles it or throws
-//     std::runtime_error.
+//     std::runtime_error; one that assembles runs for a bounded effort and ends with a status
+//     that says what happened.
 // Without sanitizers this catches the exceptions and hard crashes; scripts/fuzz-smoke.sh replays
 // the same files under ASan/UBSan. Each file is one test case, named after the file.
 #include <gtest/gtest.h>
@@ -62,16 +63,20 @@ TEST_P(FuzzRegression, OnlyModelErrorEscapes) {
 
   // Accepted: the model must be valid, compile, and either assemble or say why not.
   EXPECT_EQ(lash::fuzz::model_invariant_violation(loaded.model), "");
+  bool assembled = false;
   try {
     lash::Workspace ws(loaded.model);
     try {
       lash::initial_state(loaded.model, ws);
+      assembled = true;
     } catch (const std::runtime_error&) {
     }
   } catch (const std::exception& e) {
     FAIL() << "an accepted model failed in Workspace/initial_state with " << typeid(e).name()
            << ": " << e.what();
   }
+  // Assembled: a bounded run ends with a status that says what happened.
+  if (assembled) EXPECT_EQ(lash::fuzz::run_contract_violation(loaded.model), "");
 }
 
 TEST(FuzzRegressions, FolderHasInputs) {

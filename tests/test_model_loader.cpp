@@ -393,7 +393,7 @@ TEST(ModelLoader, TextMustBeUtf8AndOneDocument) {
   // A second document after the model.
   d = problems(std::string(kGood) + "---\nname: other\n");
   ASSERT_EQ(d.size(), 1u);
-  EXPECT_EQ(d[0].line, 36);
+  EXPECT_EQ(d[0].line, 35);  // the "---"
   EXPECT_NE(d[0].message.find("a second YAML document"), std::string::npos);
 }
 

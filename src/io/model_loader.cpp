@@ -1009,7 +1009,11 @@ void apply_override(YAML::Node root, const std::string& spec, Reporter& r) {
 class DuplicateKeyFinder : public YAML::EventHandler {
  public:
   explicit DuplicateKeyFinder(Reporter& r) : r_(r) {}
-  void OnDocumentStart(const YAML::Mark&) override {}
+  int documents = 0;
+  YAML::Mark second_document;  ///< where the second document starts, if there is one
+  void OnDocumentStart(const YAML::Mark& m) override {
+    if (++documents == 2) second_document = m;
+  }
   void OnDocumentEnd() override {}
   void OnNull(const YAML::Mark& m, YAML::anchor_t) override { done(m, nullptr); }
   void OnAlias(const YAML::Mark& m, YAML::anchor_t) override { done(m, nullptr); }
@@ -1042,7 +1046,7 @@ class DuplicateKeyFinder : public YAML::EventHandler {
   }
   /// A node ended at `m`; `key` is its text when it is a scalar.
   void done(const YAML::Mark& m, const std::string* key) {
-    if (stack_.empty() || !stack_.back().is_map) return;
+    if (documents > 1 || stack_.empty() || !stack_.back().is_map) return;
     Frame& f = stack_.back();
     if (f.expect_key && key) {
       const auto [it, fresh] = f.keys.emplace(*key, m);
@@ -1059,11 +1063,25 @@ class DuplicateKeyFinder : public YAML::EventHandler {
   std::vector<Frame> stack_;
 };
 
-void report_duplicate_keys(const std::string& text, Reporter& r) {
+/// Checks the structure yaml-cpp's Load does not: no key twice in a map of the first document,
+/// and no second document. At most two documents are read: on some malformed inputs yaml-cpp's
+/// parser returns empty documents forever (which is why YAML::LoadAll is not used).
+void check_documents(const std::string& text, Reporter& r) {
   std::istringstream in(text);
   YAML::Parser parser(in);
   DuplicateKeyFinder finder(r);
-  while (parser.HandleNextDocument(finder)) {
+  try {
+    for (int k = 0; k < 2 && parser.HandleNextDocument(finder); ++k) {
+    }
+  } catch (const YAML::Exception&) {
+    // a syntax error after the first document: reported below as a second document
+    if (finder.documents < 2) finder.documents = 2, finder.second_document = YAML::Mark::null_mark();
+  }
+  if (finder.documents > 1) {
+    const YAML::Mark& m = finder.second_document;
+    r.list.push_back({r.file, m.line >= 0 ? m.line + 1 : 0, m.line >= 0 ? m.column + 1 : 0, "",
+                      "a second YAML document ('---'): a model file holds one model; split it "
+                      "into two files"});
   }
 }
 
@@ -1131,28 +1149,21 @@ LoadedModel load_model_text(const std::string& text, const std::string& filename
                                                  "...'"}});
   YAML::Node root;
   try {
-    const std::vector<YAML::Node> docs = YAML::LoadAll(text);
-    if (docs.size() > 1) {
-      const YAML::Mark m = docs[1].Mark();
-      throw ModelError({{filename, m.line >= 0 ? m.line + 1 : 0, m.line >= 0 ? m.column + 1 : 0, "",
-                         "a second YAML document ('---'): a model file holds one model; split "
-                         "it into two files"}});
-    }
-    if (!docs.empty()) root = docs.front();
+    root = YAML::Load(text);
   } catch (const YAML::Exception& e) {
     throw ModelError({{filename, e.mark.line + 1, e.mark.column + 1, "",
                        "not valid YAML: " + e.msg}});
-  }
-  {
-    Reporter dup;
-    dup.file = filename;
-    report_duplicate_keys(text, dup);
-    if (!dup.list.empty()) throw ModelError(dup.list);
   }
   if (!root.IsMap())
     throw ModelError({{filename, 1, 1, "",
                        "expected a model (a map with bodies, joints, solver, ...), got " +
                            Section::kind(root)}});
+  {
+    Reporter structure;
+    structure.file = filename;
+    check_documents(text, structure);
+    if (!structure.list.empty()) throw ModelError(structure.list);
+  }
   return load_root(root, filename, overrides);
 }
 
