@@ -1183,6 +1183,7 @@
     if (Array.isArray(V.evidence) && V.evidence.length)
       s.append(el('ul', {class: 'evidence'}, V.evidence.map((e) => el('li', {text: String(e)}))));
     else notComputed(s, 'evidence');
+    if (V.rule) s.append(el('p', {class: 'rule', text: 'Rule: ' + V.rule}));
   }
 
   // --- resizing and start-up --------------------------------------------------------------------------

@@ -206,7 +206,7 @@ TEST(Cli, ProgressLineOnATerminal) {
 TEST(Cli, ReportAndAnalyzeAnEarlierRun) {
   const fs::path dir = temp_dir("analyze");
   ASSERT_EQ(run_lash("run " + example() + " -q -o " + dir.string()).code, 0);
-  Result r = run_lash("analyze " + dir.string() + " --poincare crank --fft slider.ax --lyapunov");
+  Result r = run_lash("analyze " + dir.string() + " --poincare crank --fft slider.ax");
   EXPECT_EQ(r.code, 0) << r.out;
   for (const char* text : {"poincare (stroboscopic): 2 sections", "spectrum slider.ax:",
                            "largest Lyapunov exponent:", "verdict: "})
@@ -570,7 +570,7 @@ TEST(Cli, AnalysisOptionsAreRangeChecked) {
       {"analyze --window 5,1", "--window 5,1: T0 must be less than T1"},
       {"report --window nan,1", "--window nan,1: both times must be finite numbers"},
       {"analyze --discard -1", "--discard -1: expected a whole number of periods"},
-      {"analyze --lyapunov --lyapunov-d0 nan", "--lyapunov-d0 nan: expected a separation > 0 m"},
+      {"analyze --lyapunov-d0 nan", "--lyapunov-d0 nan: expected a separation > 0 m"},
       {"analyze --plane slider.x=nan", "value 'nan' is not a finite number"},
       {"report --angle-range 0,inf", "--angle-range 0,inf: both angles must be finite"}};
   for (const auto& [args, message] : cases) {
@@ -611,4 +611,26 @@ TEST(Cli, SpecialFilesAreNotReadAsModels) {
     EXPECT_EQ(r.code, 2) << path << "\n" << r.out;
     EXPECT_NE(r.out.find(path + ": cannot read the model file: not a regular file"), std::string::npos) << r.out;
   }
+}
+
+TEST(Cli, TheSameRunGetsTheSameVerdictEverywhere) {
+  // 17 crank periods of the Flores example: analyze, report and the summary of run --report
+  // print the same class, evidence and rule.
+  const fs::path dir = temp_dir("verdict");
+  const Result run = run_lash("run " + example() + " -q --report -o " + dir.string() +
+                              " --set solver.end_time=0.204");
+  ASSERT_EQ(run.code, 0) << run.out;
+  const auto in_summary = read_summary(dir)["verdict"];
+  const auto in_report = nlohmann::json::parse(std::ifstream(dir / "report_data.json"))["analysis"]["verdict"];
+  const Result analyze = run_lash("analyze " + dir.string());
+  ASSERT_EQ(analyze.code, 0) << analyze.out;
+  const auto in_analysis = nlohmann::json::parse(std::ifstream(dir / "analysis.json"))["verdict"];
+  EXPECT_EQ(in_summary, in_report);
+  EXPECT_EQ(in_summary, in_analysis);
+  EXPECT_EQ(in_summary["class"], "chaotic");
+  EXPECT_NE(in_summary["evidence"][1].get<std::string>().find("in 17 sections"), std::string::npos);
+  EXPECT_NE(analyze.out.find("verdict: " + in_summary["class"].get<std::string>()), std::string::npos);
+  EXPECT_NE(analyze.out.find("rule: after the transient, with at least 16 Poincaré sections"),
+            std::string::npos) << analyze.out;
+  fs::remove_all(dir);
 }

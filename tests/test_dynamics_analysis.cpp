@@ -121,4 +121,21 @@ TEST(Verdict, WeighsTheEvidence) {
   EXPECT_EQ(classify_motion(50.0, 0.012, 30, 30, 4).kind, "chaotic");         // λT = 0.6
   EXPECT_EQ(classify_motion(-3.0, 0.012, 2, 20, 0).kind, "periodic");
   EXPECT_EQ(classify_motion(std::nan(""), 0.012, 1, 2, -1).kind, "undetermined");
+  // The rule's edges (verdict_rule()): 16 sections at least; k <= 8 points, each recurring.
+  EXPECT_EQ(classify_motion(-3.0, 0.012, 1, 15, 0).kind, "undetermined");
+  EXPECT_EQ(classify_motion(-3.0, 0.012, 1, 15, 0, 0.204).evidence.back(),
+            "not enough periods: 15 sections after the transient, 16 needed; run to end_time >= 0.204 s");
+  EXPECT_EQ(classify_motion(-3.0, 0.012, 1, 16, 0).kind, "periodic");
+  EXPECT_EQ(classify_motion(-3.0, 0.012, 8, 16, 0).kind, "periodic");
+  EXPECT_EQ(classify_motion(-3.0, 0.012, 9, 40, 0).kind, "quasi-periodic");   // k > 8
+  EXPECT_EQ(classify_motion(-3.0, 0.012, 8, 15, 0).kind, "undetermined");     // too few
+  EXPECT_EQ(classify_motion(-3.0, 0.012, 9, 17, 0).kind, "quasi-periodic");   // 9 > 17/2
+  // Recurring points decide on their own, even against a positive exponent.
+  EXPECT_EQ(classify_motion(50.0, 0.012, 2, 20, 0).kind, "periodic");
+  // Points that do not recur and no exponent: undetermined, and it says why.
+  const Verdict none = classify_motion(std::nan(""), 0.012, 30, 30, 4);
+  EXPECT_EQ(none.kind, "undetermined");
+  EXPECT_NE(none.evidence.back().find("no Lyapunov exponent"), std::string::npos);
+  // λT exactly at the threshold is not chaotic.
+  EXPECT_EQ(classify_motion(0.1 / 0.5, 0.5, 30, 30, 0).kind, "quasi-periodic");
 }

@@ -76,10 +76,20 @@ TEST(RunAnalysis, IdealSliderCrankIsPeriodicWithOnePoincarePoint) {
   ASSERT_EQ(p.times.size(), 10u);
   for (size_t k = 0; k < p.times.size(); ++k) EXPECT_NEAR(p.times[k], 0.012 * (k + 1), 1e-9);
   EXPECT_EQ(p.distinct, 1);
-  EXPECT_EQ(r.verdict.kind, "periodic");
+  // Ten sections are too few for a verdict (16 needed): the evidence says how long to run.
+  EXPECT_EQ(r.verdict.kind, "undetermined");
   EXPECT_EQ(r.verdict.distinct_points, 1);
   EXPECT_EQ(r.verdict.sections, 10);
   EXPECT_NEAR(r.verdict.period, 0.012, 1e-12);
+  EXPECT_EQ(r.verdict.evidence.back(),
+            "not enough periods: 10 sections after the transient, 16 needed; run to end_time >= 0.192 s");
+  EXPECT_EQ(r.verdict.rule, verdict_rule());
+  // Run that long: 16 sections, one point, periodic.
+  const Analysed longer = analyse(read_file(example_path("flores_slider_crank_ideal.yaml")),
+                                  {"solver.end_time=0.192", "solver.output_interval=1e-4"});
+  EXPECT_EQ(longer.run.verdict.sections, 16);
+  EXPECT_EQ(longer.run.verdict.kind, "periodic");
+  EXPECT_EQ(longer.run.verdict.evidence.back(), "period-1 orbit: every point recurs");
   // No clearance joint: no twin, no joint analysis.
   EXPECT_FALSE(r.ideal_twin.has_value());
   EXPECT_TRUE(r.clearance.empty());
@@ -273,7 +283,9 @@ TEST(RunAnalysis, LyapunovEstimateCarriesItsInputs) {
   EXPECT_EQ(r.verdict.lyapunov_exponent, l.exponent);
   // Clearance-joint impacts make the two trajectories diverge (docs/analysis.md): λT > 0.1.
   EXPECT_GT(l.exponent * r.period, 0.1);
-  EXPECT_EQ(r.verdict.kind, "chaotic");
+  // Two sections after the transient: the exponent alone does not make a verdict.
+  EXPECT_EQ(r.verdict.kind, "undetermined");
+  EXPECT_NE(r.verdict.evidence.back().find("not enough periods"), std::string::npos);
   // The separation can be set.
   o.lyapunov_d0 = 1e-8;
   const Analysed b = analyse(yaml, {"solver.end_time=0.036"}, o);

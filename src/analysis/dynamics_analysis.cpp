@@ -97,39 +97,53 @@ ModeSummary contact_modes(const std::vector<double>& times, const std::vector<bo
   return m;
 }
 
+const char* verdict_rule() {
+  return "after the transient, with at least 16 Poincaré sections (fewer: undetermined, not "
+         "enough periods): periodic (period-k) if the sections hold k <= 8 distinct points and "
+         "each recurs (k <= sections/2); otherwise chaotic if the largest Lyapunov exponent gives "
+         "lambda*T > 0.1 per period T, quasi-periodic if lambda*T <= 0.1, undetermined if no "
+         "exponent was computed";
+}
+
 Verdict classify_motion(double lyapunov, double period, int distinct, int sections,
-                        int non_harmonic_peaks) {
+                        int non_harmonic_peaks, double min_end_time) {
   Verdict v;
   std::ostringstream s;
   const bool have_lyap = std::isfinite(lyapunov);
+  const double growth = have_lyap && period > 0 ? lyapunov * period : std::nan("");
   if (have_lyap) {
     s << "largest Lyapunov exponent " << lyapunov << " 1/s";
-    if (period > 0) s << " (λT = " << lyapunov * period << " per driver period)";
+    if (period > 0) s << " (lambda*T = " << growth << " per period)";
     v.evidence.push_back(s.str());
     s.str("");
   }
-  if (sections > 0) {
-    s << distinct << " distinct Poincaré point" << (distinct == 1 ? "" : "s") << " in "
-      << sections << " sections";
-    v.evidence.push_back(s.str());
-    s.str("");
-  }
+  s << distinct << " distinct Poincaré point" << (distinct == 1 ? "" : "s") << " in " << sections
+    << " section" << (sections == 1 ? "" : "s");
+  v.evidence.push_back(s.str());
+  s.str("");
   if (non_harmonic_peaks >= 0) {
     s << non_harmonic_peaks << " strong spectral peak" << (non_harmonic_peaks == 1 ? "" : "s")
       << " off the driving harmonics";
     v.evidence.push_back(s.str());
+    s.str("");
   }
-  const double growth = have_lyap && period > 0 ? lyapunov * period : (have_lyap ? lyapunov : 0);
-  if (have_lyap && growth > 0.1) {
-    v.kind = "chaotic";
-  } else if (sections >= 4 && 2 * distinct <= sections && distinct <= 8) {
+  if (sections < kVerdictMinSections) {
+    v.kind = "undetermined";
+    s << "not enough periods: " << sections << " section" << (sections == 1 ? "" : "s")
+      << " after the transient, " << kVerdictMinSections << " needed";
+    if (min_end_time > 0) s << "; run to end_time >= " << min_end_time << " s";
+    v.evidence.push_back(s.str());
+    return v;
+  }
+  if (distinct <= kVerdictMaxPeriod && 2 * distinct <= sections) {
     v.kind = "periodic";
-    v.evidence.push_back("period-" + std::to_string(distinct) + " orbit");
-  } else if (sections >= 4 && (!have_lyap || growth <= 0.1)) {
-    v.kind = "quasi-periodic";
+    v.evidence.push_back("period-" + std::to_string(distinct) + " orbit: every point recurs");
+  } else if (std::isfinite(growth)) {
+    v.kind = growth > kVerdictChaosThreshold ? "chaotic" : "quasi-periodic";
   } else {
     v.kind = "undetermined";
-    v.evidence.push_back("too few sections or no Lyapunov exponent");
+    v.evidence.push_back("the points do not recur, and no Lyapunov exponent was computed to tell "
+                         "quasi-periodic from chaotic motion");
   }
   return v;
 }

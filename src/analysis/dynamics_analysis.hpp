@@ -67,11 +67,23 @@ struct Verdict {
   std::vector<std::string> evidence;
 };
 
-/// Combines the evidence: the largest Lyapunov exponent λ (NaN if not computed) against the
-/// period T (λT > 0.1: chaotic), the number of distinct stroboscopic Poincaré points among
-/// `sections` (≤ 8: periodic with that many points per period), and the spectrum's count of
-/// strong peaks not harmonics of the driving frequency (evidence only).
+/// Sections after the transient the verdict needs: a period-8 orbit shows each point twice.
+constexpr int kVerdictMinSections = 16;
+/// Most distinct points a periodic orbit may have (period-k, k ≤ 8).
+constexpr int kVerdictMaxPeriod = 8;
+/// λ·T above which neighbouring trajectories separate: chaotic.
+constexpr double kVerdictChaosThreshold = 0.1;
+
+/// The rule classify_motion applies, in the words analyze, report and summary.json print.
+const char* verdict_rule();
+
+/// Classifies the motion after the transient by verdict_rule(): `sections` Poincaré sections
+/// holding `distinct` distinct points, the largest Lyapunov exponent λ (NaN if not computed)
+/// and `period` T (the driver's, or the mean time between sections; λT is the growth per
+/// period); `non_harmonic_peaks` (strong spectral peaks off the driving harmonics, −1: none
+/// computed) is listed as evidence only. `min_end_time` (s, 0: unknown) is the end_time that
+/// would give enough sections, quoted when there are too few.
 Verdict classify_motion(double lyapunov, double period, int distinct, int sections,
-                        int non_harmonic_peaks);
+                        int non_harmonic_peaks, double min_end_time = 0.0);
 
 }  // namespace lash

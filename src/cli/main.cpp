@@ -170,14 +170,16 @@ int main(int argc, char** argv) {
       ->check(CLI::ExistingDirectory);
   std::string poincare_driver;
   std::vector<std::string> fft_channels;
-  bool lyapunov = false;
+  bool no_lyapunov = false;
   int discard_periods = 1;
   analyze->add_option("--poincare", poincare_driver,
                       "Stroboscopic Poincaré section once per period of this constant-speed "
                       "driver (default: the first one)");
   analyze->add_option("--fft", fft_channels, "Amplitude spectrum of these channels, e.g. slider.ax")
       ->take_all();
-  analyze->add_flag("--lyapunov", lyapunov, "Largest Lyapunov exponent (two trajectories)");
+  analyze->add_flag("--no-lyapunov", no_lyapunov,
+                    "Skip the largest Lyapunov exponent (two trajectories; computed by default, as "
+                    "by `report`, since the verdict needs it)");
   std::vector<std::string> planes;
   analyze->add_option("--plane", planes,
                       "Event-based Poincaré section instead of the stroboscopic one: "
@@ -264,7 +266,7 @@ int main(int argc, char** argv) {
     if (window.size() == 2) ro.stats_t0 = window[0], ro.stats_t1 = window[1];
     if (angle_range.size() == 2) ro.stats_angle0 = angle_range[0], ro.stats_angle1 = angle_range[1];
     if (*analyze) {
-      ro.lyapunov = lyapunov;
+      ro.lyapunov = !no_lyapunov;
       ro.poincare_driver = poincare_driver;
       ro.fft_channels = fft_channels;
       ro.lyapunov_d0 = lyapunov_d0;
@@ -318,7 +320,8 @@ int main(int argc, char** argv) {
                    an["lyapunov"]["renormalisations"].get<int>());
       fmt::print("verdict: {}", an["verdict"]["class"].get<std::string>());
       for (const auto& e : an["verdict"]["evidence"]) fmt::print("; {}", e.get<std::string>());
-      fmt::print("\nwrote {}/analysis.json\n", run_dir);
+      fmt::print("\nrule: {}\n", an["verdict"]["rule"].get<std::string>());
+      fmt::print("wrote {}/analysis.json\n", run_dir);
       return code;
     } catch (const lash::IoError& e) {
       std::cerr << "error: " << e.what() << "\n";
@@ -391,6 +394,9 @@ int main(int argc, char** argv) {
       ao.interrupt = &g_interrupt;
       ra = lash::analyze_run(model, ao, &progress);
       result = ra.result;
+      writer->add_to_summary("verdict", {{"class", ra.verdict.kind},
+                                         {"evidence", ra.verdict.evidence},
+                                         {"rule", ra.verdict.rule}});
     } else {
       result = lash::simulate(model, ws, progress, {}, {}, run_options);
     }

@@ -227,7 +227,8 @@ json report_data(const Model& model, const RunAnalysis& a) {
   an["phase"] = phase;
 
   an["lyapunov"] = lyapunov_json(a.lyapunov);
-  an["verdict"] = {{"class", a.verdict.kind}, {"evidence", a.verdict.evidence}};
+  an["verdict"] = {{"class", a.verdict.kind}, {"evidence", a.verdict.evidence},
+                   {"rule", a.verdict.rule}};
   d["analysis"] = an;
   return d;
 }

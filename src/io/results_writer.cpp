@@ -192,6 +192,7 @@ RunStatus ResultsWriter::finish(const RunResult& r) {
                  {"initial_state", s.initial_state == InitialStateRule::ideal ? "ideal" : "given"},
                  {"baumgarte_alpha", s.baumgarte_alpha},
                  {"baumgarte_beta", s.baumgarte_beta}};
+  for (const auto& [key, value] : extra_.items()) j[key] = value;
   write_file_atomic(folder_ + "/summary.json",
                     j.dump(2, ' ', false, json::error_handler_t::replace) + "\n");
   return status;

@@ -9,6 +9,8 @@
 /// rows before it intact, and summary.json, written last and atomically, says what happened.
 #include <fmt/format.h>
 
+#include <nlohmann/json.hpp>
+
 #include <string>
 #include <vector>
 
@@ -37,6 +39,9 @@ class ResultsWriter : public Observer {
   /// written.
   RunStatus finish(const RunResult& result);
 
+  /// Adds `key` (e.g. "verdict" of a run analysed as it ran) to summary.json.
+  void add_to_summary(const std::string& key, nlohmann::json value) { extra_[key] = std::move(value); }
+
   /// Output files of a run, removed before a new run writes into the same folder.
   static const std::vector<std::string>& run_files();
 
@@ -59,6 +64,7 @@ class ResultsWriter : public Observer {
   std::string from_;
   RowFile ts_, ev_;
   std::string write_error_;
+  nlohmann::json extra_ = nlohmann::json::object();
   std::vector<ChannelInfo> channels_;
   std::vector<double> values_;
   fmt::memory_buffer row_;

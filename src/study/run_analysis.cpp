@@ -547,6 +547,16 @@ RunAnalysis analyze_run(const Model& model, const AnalysisOptions& o, Observer* 
                  : std::min(tol, 0.01 * model.joints[ws.clearance_joints[c]].clearance->clearance);
   const int distinct = count_distinct(col.sections, tol);
   const int n_sections = static_cast<int>(col.sections.size());
+  // The period the exponent is weighed against, and the run that would give enough sections:
+  // stroboscopic sections fall at k·T for k >= the discarded periods; event-based ones at the
+  // rate seen so far.
+  double verdict_period = period, min_end_time = 0.0;
+  if (period > 0 && planes.empty()) {
+    min_end_time = (kVerdictMinSections - 1 + o.discard_periods) * period;
+  } else if (n_sections >= 2) {
+    verdict_period = (col.section_t.back() - col.section_t.front()) / (n_sections - 1);
+    min_end_time = t_discard + (kVerdictMinSections + 1) * verdict_period;
+  }
   if (period > 0 || !planes.empty()) {
     PoincareSections p;
     p.kind = planes.empty() ? "stroboscopic" : "event";
@@ -597,9 +607,11 @@ RunAnalysis analyze_run(const Model& model, const AnalysisOptions& o, Observer* 
     }
   }
 
-  const Verdict v = classify_motion(lyap, period, distinct, n_sections, off_harmonic);
+  const Verdict v =
+      classify_motion(lyap, verdict_period, distinct, n_sections, off_harmonic, min_end_time);
   out.verdict.kind = v.kind;
   out.verdict.evidence = v.evidence;
+  out.verdict.rule = verdict_rule();
   out.verdict.lyapunov_exponent = lyap;
   out.verdict.period = period;
   out.verdict.distinct_points = distinct;

@@ -163,8 +163,9 @@ struct LyapunovEstimate {
 
 /// periodic / quasi-periodic / chaotic / undetermined, and what it rests on.
 struct MotionVerdict {
-  std::string kind;
-  std::vector<std::string> evidence;
+  std::string kind;                    ///< periodic, quasi-periodic, chaotic, undetermined
+  std::vector<std::string> evidence;   ///< the numbers the rule used, as sentences
+  std::string rule;                    ///< the rule, verdict_rule() (analysis/dynamics_analysis.hpp)
   double lyapunov_exponent = std::nan("");  ///< 1/s, NaN when not estimated
   double period = 0.0;                      ///< s, 0 without a period driver
   int distinct_points = 0;                  ///< distinct Poincaré points
