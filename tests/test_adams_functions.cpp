@@ -26,12 +26,13 @@ TEST(Step, SlopeVanishesAtBothEnds) {
   EXPECT_NEAR((step(1, 0, 0, 1, 1) - step(1 - h, 0, 0, 1, 1)) / h, 0.0, 1e-5);
 }
 
-TEST(Step5, MatchesQuinticAndSeed004Drive) {
+TEST(Step5, MatchesQuinticAndTheBreakerDrive) {
   // Δ = 0.3: Δ³(10 − 15Δ + 6Δ²)
   const double d = 0.3, expected = d * d * d * (10 - 15 * d + 6 * d * d);
   EXPECT_NEAR(step5(0.3, 0.0, 0.0, 1.0, 1.0), expected, 1e-15);
   EXPECT_DOUBLE_EQ(step5(0.5, 0.0, 0.0, 1.0, 1.0), 0.5);
-  // Seed 004 drive STEP5(time, 0, 0, 0.085, 230 mm): full stroke at 0.085 s, half at 0.0425 s.
+  // The UHV circuit-breaker linkage drive STEP5(time, 0, 0, 0.085, 230 mm) (flexible transmission
+  // mechanism with multiclearance joints for UHV circuit breakers): full stroke at 0.085 s, half at 0.0425 s.
   EXPECT_DOUBLE_EQ(step5(0.085, 0, 0, 0.085, 0.230), 0.230);
   EXPECT_NEAR(step5(0.0425, 0, 0, 0.085, 0.230), 0.115, 1e-15);
   // Second derivative ~0 at the ends (STEP5 is C²): central difference at x0.

@@ -49,8 +49,9 @@ TEST(NormalLaws, FormulasToRoundOff) {
   EXPECT_NEAR(impact_law(d, dd, p), kd + 1e4 * 0.04 * 2.6 * dd, 1e-12 * kd);
 }
 
-TEST(NormalLaws, LankaraniNikraveshSeedFormWithHysteresisDamping) {
-  // Seed 002 eq. 5/8: F = K δ^1.5 + D δ̇, D = 3K(1 − cₑ²)δ^1.5/(4 δ̇⁻).
+TEST(NormalLaws, LankaraniNikraveshErkayaFormWithHysteresisDamping) {
+  // Erkaya, Doğan & Ulus, Mech. Mach. Theory 88 (2015) eqs. 5 and 8:
+  // F = K δ^1.5 + D δ̇, D = 3K(1 − cₑ²)δ^1.5/(4 δ̇⁻).
   const auto p = params(0.9);
   const double d = 5e-6, dd = -0.7, v0 = 2.0;
   const double damping = 3 * p.stiffness * (1 - 0.81) * std::pow(d, 1.5) / (4 * v0);
