@@ -290,6 +290,7 @@ int main(int argc, char** argv) {
       std::cerr << model_path << ": " << e.what() << "\n";
       return 2;
     }
+    for (const auto& w : result.warnings) std::cerr << model_path << ": warning: " << w << "\n";
     writer.finish(result, loaded.resolved_yaml, overrides, from_state);
 
     // The report covers what was computed, up to a failure too.
