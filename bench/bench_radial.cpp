@@ -8,6 +8,8 @@
 //   bench_radial                 the curve: N = 1, 2, 4, 8, 15 (ns per rhs, ms per simulated s)
 //   bench_radial --yaml N        prints the model for N cylinders (YAML) and exits
 //   bench_radial --repeats R     repeats per timed case (default 7; the median is reported)
+//   bench_radial --count N C     only C evaluations at the fixed state of N cylinders (for
+//                                instruction counts: valgrind --tool=callgrind, two values of C)
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -96,6 +98,21 @@ struct Row {
   long rhs = 0, steps = 0, events = 0;
 };
 
+/// The assembled state of N cylinders with every piston 0.1 mm into its bearing.
+Eigen::VectorXd pressed_state(const lash::Model& model, lash::Workspace& ws, int n) {
+  Eigen::VectorXd y = lash::initial_state(model, ws);
+  // Every piston 0.1 mm past its clearance along its guide: all contacts compute forces.
+  ws.contact.assign(ws.nc, {true});
+  for (int k = 0; k < n; ++k) {
+    const double al = 2.0 * M_PI * k / n;
+    const int off = ws.blocks[2 + 2 * k].offset;  // bodies: crank, rod0, piston0, rod1, …
+    y[off] += 0.6e-3 * std::cos(al);
+    y[off + 1] += 0.6e-3 * std::sin(al);
+  }
+  for (int i : ws.aux_impact) y[i] = 1.0;
+  return y;
+}
+
 Row measure(int n, int repeats) {
   const lash::Model model = lash::load_model_text(radial_yaml(n), "radial.yaml").model;
   Row r;
@@ -104,16 +121,7 @@ Row measure(int n, int repeats) {
     lash::Workspace ws(model);
     r.m = ws.m;
     r.nq = ws.nq;
-    Eigen::VectorXd y = lash::initial_state(model, ws), ydot(ws.ny);
-    // Every piston 0.1 mm past its clearance along its guide: all contacts compute forces.
-    ws.contact.assign(ws.nc, {true});
-    for (int k = 0; k < n; ++k) {
-      const double al = 2.0 * M_PI * k / n;
-      const int off = ws.blocks[2 + 2 * k].offset;  // bodies: crank, rod0, piston0, rod1, …
-      y[off] += 0.6e-3 * std::cos(al);
-      y[off + 1] += 0.6e-3 * std::sin(al);
-    }
-    for (int i : ws.aux_impact) y[i] = 1.0;
+    Eigen::VectorXd y = pressed_state(model, ws, n), ydot(ws.ny);
     const int calls = std::max(2000, 100000 / n);
     std::vector<double> s;
     for (int rep = 0; rep < repeats; ++rep) {
@@ -150,6 +158,15 @@ int main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--yaml") && i + 1 < argc) {
       std::fputs(radial_yaml(std::atoi(argv[i + 1])).c_str(), stdout);
+      return 0;
+    }
+    if (!std::strcmp(argv[i], "--count") && i + 2 < argc) {
+      const int n = std::atoi(argv[i + 1]), calls = std::atoi(argv[i + 2]);
+      const lash::Model model = lash::load_model_text(radial_yaml(n), "radial.yaml").model;
+      lash::Workspace ws(model);
+      Eigen::VectorXd y = pressed_state(model, ws, n), ydot(ws.ny);
+      for (int c = 0; c < calls; ++c) lash::evaluate(model, ws, 0.0, y.data(), ydot.data());
+      std::printf("%d evaluations, N = %d, %d rows\n", calls, n, ws.m);
       return 0;
     }
     if (!std::strcmp(argv[i], "--repeats") && i + 1 < argc) {
