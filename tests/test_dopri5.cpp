@@ -149,3 +149,37 @@ TEST(Dopri5, ReportsStepUnderflowInsteadOfHanging) {
   EXPECT_NEAR(a.t, 1.0, 1e-3);
   EXPECT_FALSE(a.message.empty());
 }
+
+TEST(Failure, ARightHandSideThatKeepsFailingStopsBothIntegratorsInBoundedTime) {
+  // The oscillator whose right-hand side cannot be evaluated past t = 0.5 (as a constraint
+  // system that no regularisation can factor): both integrators return a failure near 0.5,
+  // after a bounded number of evaluations, with a message saying why.
+  for (auto make : {&make_dopri5, &make_cvode_bdf}) {
+    OdeProblem p = oscillator();
+    long calls = 0;
+    const auto f = p.rhs;
+    p.rhs = [&calls, f](double t, const double* y, double* dy) {
+      ++calls;
+      return t <= 0.5 && f(t, y, dy);
+    };
+    IntegratorOptions o;
+    o.rtol = 1e-8;
+    o.atol = 1e-10;
+    auto integ = make(p, o);
+    SCOPED_TRACE(integ->name());
+    Eigen::VectorXd y(2);
+    y << 1, 0;
+    integ->reset(0, y);
+    const Advance a = integ->advance(2.0, y);
+    ASSERT_EQ(a.kind, Advance::failure);
+    EXPECT_NEAR(a.t, 0.5, 0.05);
+    EXPECT_LT(calls, 5000);
+    if (std::string(integ->name()) == "dopri5") {
+      // The step size in exponent form: "h = 1.234e-16 s".
+      EXPECT_NE(a.message.find("step size underflow (h = "), std::string::npos) << a.message;
+      EXPECT_NE(a.message.find("e-"), std::string::npos) << a.message;
+    } else {
+      EXPECT_NE(a.message.find("right-hand side failed 60 times"), std::string::npos) << a.message;
+    }
+  }
+}

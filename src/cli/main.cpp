@@ -404,6 +404,8 @@ int main(int argc, char** argv) {
     std::cerr << model_path << ": " << e.what() << "\n";
     return kExitBadInput;
   }
+  for (const auto& w : result.warnings) std::cerr << model_path << ": warning: " << w << "\n";
+  if (!result.warnings.empty()) writer->add_to_summary("warnings", result.warnings);
   lash::RunStatus status;
   try {
     status = writer->finish(result);

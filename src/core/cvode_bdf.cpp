@@ -4,6 +4,7 @@
 #include <sunlinsol/sunlinsol_dense.h>
 #include <sunmatrix/sunmatrix_dense.h>
 
+#include <cstdio>
 #include <exception>
 #include <stdexcept>
 #include <string>
@@ -14,6 +15,12 @@
 namespace lash {
 
 namespace {
+
+/// Failed right-hand sides, with no success past the latest failure's time in between, after
+/// which the run stops. CVODE answers each failure with a smaller step and, when the right-hand
+/// side fails from some time on, creeps toward that time with ever smaller successful steps,
+/// without end.
+constexpr long kMaxRhsFailures = 60;
 
 /// Every SUNDIALS call goes through here: a negative flag becomes an exception naming the call.
 void check(int flag, const char* call) {
@@ -91,6 +98,17 @@ class CvodeBdf final : public Integrator {
     if (flag < 0) {
       double t_cur = t_ret;
       CVodeGetCurrentTime(mem_, &t_cur);
+      if (rhs_failures_ >= kMaxRhsFailures) {
+        char msg[200];
+        double h = 0.0;
+        CVodeGetCurrentStep(mem_, &h);
+        std::snprintf(msg, sizeof msg,
+                      "the right-hand side failed %ld times without getting past t = %.9g s (last "
+                      "step h = %.3e s): the state or its derivative is not finite, or the "
+                      "constraints cannot be solved",
+                      rhs_failures_, failed_at_, h);
+        return {Advance::failure, failed_at_, msg};
+      }
       return {Advance::failure, t_cur,
               std::string(CVodeGetReturnFlagName(flag)) +
                   (last_error_.empty() ? "" : ": " + last_error_)};
@@ -127,7 +145,13 @@ class CvodeBdf final : public Integrator {
     // return is unrecoverable), and rethrow it from advance().
     try {
       const bool ok = self->p_.rhs(t, N_VGetArrayPointer(y), N_VGetArrayPointer(ydot));
-      return ok ? 0 : 1;  // 1: recoverable, CVODE retries with a smaller step
+      if (ok) {
+        if (t > self->failed_at_) self->rhs_failures_ = 0;  // got past the failure
+        return 0;
+      }
+      self->failed_at_ = t;
+      // 1: recoverable, CVODE retries with a smaller step; bounded here (−1 stops CVODE).
+      return ++self->rhs_failures_ >= kMaxRhsFailures ? -1 : 1;
     } catch (...) {
       self->pending_ = std::current_exception();
       return -1;
@@ -155,6 +179,8 @@ class CvodeBdf final : public Integrator {
   IntegratorStats accumulated_;
   std::string last_error_;
   std::exception_ptr pending_;  ///< thrown by the right-hand side during CVode()
+  long rhs_failures_ = 0;       ///< failed right-hand sides since one succeeded past failed_at_
+  double failed_at_ = 0.0;      ///< time of the last failed right-hand side
 };
 
 }  // namespace

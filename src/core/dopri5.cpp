@@ -1,5 +1,6 @@
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 
 #include "core/integrator.hpp"
@@ -126,7 +127,11 @@ class Dopri5 final : public Integrator {
       double h = h_;
       if (o_.max_step > 0) h = std::min(h, o_.max_step);
       if (h < 16.0 * std::numeric_limits<double>::epsilon() * std::max(1.0, std::abs(t_)))
-        return "step size underflow (h = " + std::to_string(h) + " s)";
+      {
+        char msg[96];
+        std::snprintf(msg, sizeof msg, "step size underflow (h = %.3e s at t = %.9g s)", h, t_);
+        return msg;
+      }
       const bool ok = stages(y_, k1_, t_, h);
       if (!ok) {  // a stage left the domain: shrink hard and retry
         ++stats_.rejected_steps;

@@ -45,36 +45,6 @@ void build_constraints(const Model& model, Workspace& ws, double t, const double
     driver_constrain(model, ws, static_cast<int>(di), t, y, ws.row_of_driver[di], out);
 }
 
-/// Solves W x = b for symmetric positive definite W given by its lower triangle within the
-/// envelope `first` (W(i, j) = 0 for j < first[i]), factoring W in place (W = L Lᵀ, same
-/// envelope). Returns false if W is not positive definite (redundant constraints).
-bool cholesky_solve(Eigen::MatrixXd& w, const std::vector<int>& first, const Eigen::VectorXd& b,
-                    Eigen::VectorXd& x) {
-  const int n = static_cast<int>(w.rows());
-  for (int i = 0; i < n; ++i) {
-    for (int j = first[i]; j <= i; ++j) {
-      double v = w(i, j);
-      for (int k = std::max(first[i], first[j]); k < j; ++k) v -= w(i, k) * w(j, k);
-      if (j < i) {
-        w(i, j) = v / w(j, j);
-      } else {
-        if (!(v > 0.0)) return false;
-        w(i, i) = std::sqrt(v);
-      }
-    }
-  }
-  for (int i = 0; i < n; ++i) {  // L z = b
-    double v = b[i];
-    for (int k = first[i]; k < i; ++k) v -= w(i, k) * x[k];
-    x[i] = v / w(i, i);
-  }
-  for (int i = n - 1; i >= 0; --i) {  // Lᵀ x = z: column i of L, rows k > i within their envelopes
-    x[i] /= w(i, i);
-    for (int k = first[i]; k < i; ++k) x[k] -= w(i, k) * x[i];
-  }
-  return true;
-}
-
 /// The bodies' state as load expressions read it (`<body>.x` …), from ws.kin.
 void load_body_state(Workspace& ws) {
   for (int b = 0; b < ws.nb; ++b) {
@@ -128,6 +98,7 @@ std::vector<std::string> state_names(const Model& model, const Workspace& ws) {
   for (int a = 0; a < ws.na; ++a) n[2 * ws.nq + a] = ws.aux_names[a];
   n[ws.i_dissipated] = "energy.dissipated";
   n[ws.i_input] = "energy.input";
+  n[ws.i_stabilization] = "energy.stabilization";
   return n;
 }
 
@@ -169,17 +140,6 @@ Workspace::Workspace(const Model& model) {
     else
       row_bodies.push_back({model.joints[d.joint].a.body, model.joints[d.joint].b.body});
   }
-  auto shares_body = [](const std::array<int, 2>& a, const std::array<int, 2>& b) {
-    for (int x : a)
-      if (x >= 0 && (x == b[0] || x == b[1])) return true;
-    return false;
-  };
-  row_first.assign(m, 0);
-  for (int i = 0; i < m; ++i) {
-    int j = 0;
-    while (j < i && !shares_body(row_bodies[i], row_bodies[j])) ++j;
-    row_first[i] = j;
-  }
   kin.assign(nb, BodyKin{});
   for (int b = 0; b < nb; ++b) kin[b].block = blocks[b];
   // Auxiliary states: the clearance joints', then the speed-profile drivers' positions.
@@ -201,7 +161,8 @@ Workspace::Workspace(const Model& model) {
     if (i >= 0) i += 2 * nq;
   i_dissipated = 2 * nq + na;
   i_input = i_dissipated + 1;
-  ny = i_input + 1;
+  i_stabilization = i_input + 1;
+  ny = i_stabilization + 1;
 
   for (const auto& b : model.bodies) vars.body_names.push_back(b.name);
   vars.body_state.assign(6 * nb, 0.0);
@@ -237,7 +198,6 @@ Workspace::Workspace(const Model& model) {
   lambda = Eigen::VectorXd::Zero(m);
   rate_m.resize(m);
   phi_q = Eigen::MatrixXd::Zero(m, nq);
-  w.resize(m, m);
 }
 
 void event_functions(const Model& model, const Workspace& ws, const double* y, double* g) {
@@ -277,48 +237,33 @@ bool evaluate(const Model& model, Workspace& ws, double t, const double* y, doub
       ydot[ws.aux_driver[d]] = fd;
     }
 
-  // Constraint forces from the Schur complement.
-  ws.qdd = ws.minv.cwiseProduct(ws.g);
+  // Constraint forces: the sparse augmented system (core/constraint_solver.hpp).
+  ws.stabilization_power = 0.0;
   if (ws.m > 0) {
     build_constraints(model, ws, t, y, false, ws.phi, ws.phi_q, &ws.phi_dot, &ws.gamma);
+    if (!ws.solver) prepare_constraint_solver(model, ws, ws.phi_q);
     const double a = model.solver.baumgarte_alpha, b = model.solver.baumgarte_beta;
-    // rhs = γ − 2αΦ̇ − β²Φ − Φ_q M⁻¹ g, and W = Φ_q M⁻¹ Φ_qᵀ, from the row structure (each row
-    // touches at most two coordinate blocks), then W λ = rhs by an in-place Cholesky
-    // factorisation.
-    const int m = ws.m;
+    // γ_B = γ − 2αΦ̇ − β²Φ and Φ_q q̇, from the row structure (each row touches at most two
+    // coordinate blocks).
     const Eigen::Map<const Eigen::VectorXd> qd(y + nq, nq);
-    for (int i = 0; i < m; ++i) {
-      double pq = 0.0, rate = 0.0;
+    for (int i = 0; i < ws.m; ++i) {
+      double rate = 0.0;
       for (int bi : ws.row_bodies[i]) {
         if (bi < 0) continue;
-        for_block(ws.blocks[bi], [&](int k) {
-          pq += ws.phi_q(i, k) * ws.qdd[k];
-          rate += ws.phi_q(i, k) * qd[k];
-        });
+        for_block(ws.blocks[bi], [&](int k) { rate += ws.phi_q(i, k) * qd[k]; });
       }
-      ws.rhs_m[i] = ws.gamma[i] - 2.0 * a * ws.phi_dot[i] - b * b * ws.phi[i] - pq;
+      ws.rhs_m[i] = ws.gamma[i] - 2.0 * a * ws.phi_dot[i] - b * b * ws.phi[i];
       ws.rate_m[i] = rate;
-      for (int j = ws.row_first[i]; j <= i; ++j) {
-        double sum = 0.0;
-        for (int bi : ws.row_bodies[i]) {
-          if (bi < 0 || (bi != ws.row_bodies[j][0] && bi != ws.row_bodies[j][1])) continue;
-          for_block(ws.blocks[bi],
-                    [&](int k) { sum += ws.phi_q(i, k) * ws.minv[k] * ws.phi_q(j, k); });
-        }
-        ws.w(i, j) = sum;
-      }
     }
-    if (!cholesky_solve(ws.w, ws.row_first, ws.rhs_m, ws.lambda)) return false;
-    for (int i = 0; i < m; ++i)
-      for (int bi : ws.row_bodies[i]) {
-        if (bi < 0) continue;
-        for_block(ws.blocks[bi], [&](int k) { ws.g[k] += ws.phi_q(i, k) * ws.lambda[i]; });
-      }
-    ws.qdd = ws.minv.cwiseProduct(ws.g);
-    // Power of all constraint forces: the drivers' work (and Baumgarte's, ≈ 0).
-    ws.input_power += ws.lambda.dot(ws.rate_m);
+    if (!solve_constraints(ws)) return false;
+    // Power of the constraint forces λ·Φ_q q̇ = λ·(Φ̇ − Φ_t), split into the drivers' input
+    // −λΦ_t (Φ_t = 0 for every other row) and the work on the drift, λ·Φ̇: Baumgarte's, which
+    // would be 0 on the exact constraint manifold.
+    for (int r : ws.row_of_driver) ws.input_power += ws.lambda[r] * (ws.rate_m[r] - ws.phi_dot[r]);
+    ws.stabilization_power = ws.lambda.dot(ws.phi_dot);
     ws.constraint_violation = ws.phi.cwiseAbs().maxCoeff();
   } else {
+    ws.qdd = ws.minv.cwiseProduct(ws.g);
     ws.constraint_violation = 0.0;
   }
 
@@ -328,7 +273,9 @@ bool evaluate(const Model& model, Workspace& ws, double t, const double* y, doub
   }
   ydot[ws.i_dissipated] = ws.dissipated_power;
   ydot[ws.i_input] = ws.input_power;
-  return std::isfinite(ws.qdd.sum()) && std::isfinite(ws.dissipated_power);
+  ydot[ws.i_stabilization] = ws.stabilization_power;
+  return std::isfinite(ws.qdd.sum()) && std::isfinite(ws.dissipated_power) &&
+         std::isfinite(ws.stabilization_power);
 }
 
 double constraint_residual(const Model& model, Workspace& ws, double t, const double* y) {
@@ -369,13 +316,12 @@ std::string constraint_problem(const Model& model, Workspace& ws, double t,
   Eigen::MatrixXd pq(ws.m, nq);
   update_kin(ws, y.data());
   build_constraints(model, ws, t, y.data(), false, p, pq, &pd, nullptr);
-  // The actual constraint set must be independent for the Schur complement to be SPD.
-  Eigen::FullPivLU<Eigen::MatrixXd> lu(pq);
-  if (lu.rank() < ws.m)
-    return "the joints and drivers are redundant: " + std::to_string(ws.m) +
-           " constraint equations but only " + std::to_string(lu.rank()) +
-           " independent ones; remove a joint or a driver, or turn a revolute joint into a "
-           "clearance joint";
+  // Redundant joint equations are dropped (named in ws.warnings); a redundant driver throws.
+  try {
+    prepare_constraint_solver(model, ws, pq);
+  } catch (const std::runtime_error& e) {
+    return e.what();
+  }
   if (check_residual) {
     const double pos = p.cwiseAbs().maxCoeff(), vel = pd.cwiseAbs().maxCoeff();
     if (!(pos <= kStateTolerancePosition) || !(vel <= kStateToleranceVelocity)) {

@@ -3,17 +3,17 @@
 /// Equations of motion in planar body coordinates (Nikravesh, Computer-Aided Analysis of
 /// Mechanical Systems, 1988, ch. 13):
 ///   M q̈ = g(q, q̇, t) + Φ_qᵀ λ,   Φ_q q̈ = γ − 2αΦ̇ − β²Φ  (Baumgarte),
-/// q made of one coordinate block per body (core/kinematics.hpp). M is block diagonal, so λ
-/// comes from the m×m Schur complement (Φ_q M⁻¹ Φ_qᵀ) λ = γ_B − Φ_q M⁻¹ g, assembled from the
-/// sparse row structure and factored by Cholesky. Every element kind lives in
+/// q made of one coordinate block per body (core/kinematics.hpp). q̈ and λ come from the sparse
+/// augmented system of core/constraint_solver.hpp. Every element kind lives in
 /// core/elements/ and is listed in core/elements/registry.hpp. The ODE state is
-///   y = [q (nq), q̇ (nq), auxiliary states (na), E_dissipated, W_input].
+///   y = [q (nq), q̇ (nq), auxiliary states (na), E_dissipated, W_input, W_stabilization].
 #include <Eigen/Core>
 #include <array>
 #include <memory>
 #include <string>
 #include <vector>
 
+#include "core/constraint_solver.hpp"
 #include "core/expression.hpp"
 #include "core/kinematics.hpp"
 #include "core/model.hpp"
@@ -62,15 +62,13 @@ struct Workspace {
   int ny = 0;   ///< ODE state size, 2 nq + na + 2
   int nc = 0;   ///< clearance joints
   int i_dissipated = 0, i_input = 0;  ///< indices of E_dissipated and W_input in y
+  int i_stabilization = 0;            ///< index of W_stabilization (Baumgarte forces' work) in y
   std::vector<BodyBlock> blocks;   ///< per body
   std::vector<int> row_of_joint;   ///< first constraint row of each joint (−1: clearance joint)
   std::vector<int> row_of_driver;  ///< constraint row of each driver
   /// The (at most two) bodies each constraint row touches, −1 for none/ground: Φ_q is sparse and
-  /// the Schur complement is assembled from this structure.
+  /// the constraint solver's pattern is built from this structure.
   std::vector<std::array<int, 2>> row_bodies;
-  /// Envelope of W = Φ_q M⁻¹ Φ_qᵀ: the first row j ≤ i sharing a body with row i. Cholesky keeps
-  /// the envelope, so a chain's banded W factors in linear time.
-  std::vector<int> row_first;
   std::vector<BodyKin> kin;        ///< per body, filled at the start of each evaluation
   std::vector<int> clearance_joints;  ///< joint indices of clearance joints
   std::vector<ContactState> contact;  ///< per clearance joint
@@ -85,14 +83,21 @@ struct Workspace {
   std::vector<std::vector<Expression>> load_expr;   ///< per load: fx, fy or torque
   bool loads_use_state = false;
 
-  // Work arrays (sized once).
+  // Work arrays (sized once). g: applied generalised forces (no constraint forces); rhs_m: the
+  // stabilised constraint accelerations γ_B = γ − 2αΦ̇ − β²Φ; rate_m: Φ_q q̇.
   Eigen::VectorXd minv, g, phi, phi_dot, gamma, rhs_m, rate_m, lambda, qdd;
-  Eigen::MatrixXd phi_q, w;
+  Eigen::MatrixXd phi_q;
+  /// The sparse constraint solver, set up at assembly (initial_state, constraint_problem) or at
+  /// the first evaluation; redundant rows are dropped there and named in `warnings`.
+  std::unique_ptr<ConstraintSolver> solver;
+  std::vector<std::string> warnings;
 
   // Outputs of the last evaluate().
   std::vector<ClearanceOutput> clearance_out;
   std::vector<LoadOutput> load_out;
   double kinetic = 0.0, potential = 0.0, dissipated_power = 0.0, input_power = 0.0;
+  /// Power of the constraint forces on the constraint drift, λ·Φ̇ (Baumgarte's work), W.
+  double stabilization_power = 0.0;
   double constraint_violation = 0.0;  ///< max |Φ|, m or rad
   long rhs_evaluations = 0;
   long missed_events = 0;  ///< crossings found only by the mode/gap consistency check
@@ -108,15 +113,16 @@ struct Workspace {
 BodyKin body_kin(const Workspace& ws, int b, const double* y);
 
 /// Names of the entries of y, in order: `<body>.<x|y|phi>`, `<body>.<vx|vy|omega>`, the
-/// auxiliary states' names, `energy.dissipated`, `energy.input`.
+/// auxiliary states' names, `energy.dissipated`, `energy.input`, `energy.stabilization`.
 std::vector<std::string> state_names(const Model& model, const Workspace& ws);
 
 /// Fills ws.kin from y.
 void update_kin(Workspace& ws, const double* y);
 
 /// Evaluates ẏ = f(t, y); fills the workspace's outputs (λ, contact and load quantities,
-/// energies). Allocates nothing. Returns false if the constraint matrix is singular or a value
-/// is not finite. Throws std::runtime_error if an expression cannot be evaluated.
+/// energies). Allocates nothing (after the first call, which sets up the constraint solver if
+/// assembly has not). Returns false if the constraint system cannot be factored even
+/// regularised, or a value is not finite. Throws std::runtime_error if an expression cannot be evaluated.
 bool evaluate(const Model& model, Workspace& ws, double t, const double* y, double* ydot);
 
 /// Event functions, one per clearance joint: g_k = s_k δ_k with s_k = +1 in free flight and −1 in
@@ -138,8 +144,9 @@ Eigen::VectorXd initial_state(const Model& model, Workspace& ws);
 inline constexpr double kStateTolerancePosition = 1e-6;
 inline constexpr double kStateToleranceVelocity = 1e-4;
 
-/// Why y cannot be run at time t: redundant joints and drivers (Φ_q rank-deficient) or, with
-/// check_residual, constraint residuals beyond kStateTolerance*. "" when it can.
+/// Why y cannot be run at time t: a redundant driver or, with check_residual, constraint
+/// residuals beyond kStateTolerance*. "" when it can. Sets up ws's constraint solver at y
+/// (redundant joint equations are dropped and named in ws.warnings).
 std::string constraint_problem(const Model& model, Workspace& ws, double t,
                                const Eigen::VectorXd& y, bool check_residual);
 

@@ -234,7 +234,7 @@ std::string state_mismatch(const Workspace& ws, const State& state) {
   if (state.y.size() != ws.ny)
     s << "the state has " << state.y.size() << " values but this model needs " << ws.ny
       << " (" << ws.nq << " coordinates, " << ws.nq << " velocities, " << ws.na
-      << " auxiliary states, 2 energy integrals)";
+      << " auxiliary states, 3 energy integrals)";
   else if (static_cast<int>(state.modes.size()) != ws.nc)
     s << "the state has " << state.modes.size() << " contact modes but this model has " << ws.nc
       << " clearance joints";
@@ -277,6 +277,7 @@ RunResult simulate(const Model& model, Workspace& ws, Observer& observer,
   }
   Eigen::VectorXd y = sim.state();
   Eigen::VectorXd ydot(ws.ny);
+  result.warnings = ws.warnings;
 
   // Outputs at k·interval on one global grid (so a continued run lands on the same times), and
   // at end_time when it is not a multiple of the interval; stroboscopic sections merged in.

@@ -86,6 +86,8 @@ struct RunResult {
   long outputs = 0;
   long missed_events = 0;  ///< mode corrections at outputs (crossings no event function saw)
   State final_state;       ///< where the run stopped (the failure time on a failure)
+  /// What assembly accepted with a caveat: redundant joint equations dropped (named).
+  std::vector<std::string> warnings;
 };
 
 /// Options of one run beyond the model's solver settings.

@@ -38,14 +38,18 @@ void emit(const Model& model, const Workspace& ws, const Eigen::VectorXd& y, Cha
     s.add(k.quantity, k.unit, k.description, k.read(model, ws, sn));
   }
   static const std::string energy = "energy", constraint = "constraint";
-  const double diss = y[ws.i_dissipated], input = y[ws.i_input];
+  const double diss = y[ws.i_dissipated], input = y[ws.i_input], stab = y[ws.i_stabilization];
   s.element(energy);
   s.add("kinetic", "J", "kinetic energy", ws.kinetic);
   s.add("potential", "J", "potential energy (gravity, springs, contact)", ws.potential);
   s.add("dissipated", "J", "energy dissipated since t = 0", diss);
   s.add("input", "J", "work of drivers and applied loads since t = 0", input);
-  s.add("balance", "J", "kinetic + potential + dissipated − input (constant)",
-        ws.kinetic + ws.potential + diss - input);
+  s.add("stabilization", "J",
+        "work of the constraint-stabilisation (Baumgarte) forces since t = 0", stab);
+  s.add("balance", "J",
+        "kinetic + potential + dissipated − input − stabilization (constant up to the "
+        "integration error)",
+        ws.kinetic + ws.potential + diss - input - stab);
   s.element(constraint);
   s.add("violation", "m", "largest constraint residual |Φ| (m or rad)", ws.constraint_violation);
 }

@@ -1,0 +1,331 @@
+#include "core/constraint_solver.hpp"
+
+#include <Eigen/OrderingMethods>
+#include <Eigen/QR>
+#include <Eigen/SVD>
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "core/dynamics.hpp"
+#include "core/elements/registry.hpp"
+
+namespace lash {
+
+namespace {
+
+/// Anchored rows restricted to a body's block are accepted when their smallest singular value,
+/// each row scaled to unit length, is at least this: they then stay independent at every
+/// configuration near the assembled one.
+constexpr double kAnchorConditioning = 1e-3;
+
+/// The element each constraint row belongs to: (is_driver, index), and its number of rows.
+struct RowOwner {
+  bool driver = false;
+  int index = 0;
+};
+
+std::vector<RowOwner> row_owners(const Model& model, const Workspace& ws) {
+  std::vector<RowOwner> owner(ws.m);
+  for (size_t ji = 0; ji < model.joints.size(); ++ji) {
+    const int r0 = ws.row_of_joint[ji];
+    if (r0 < 0) continue;
+    const int n = kind_of(model.joints[ji]).rows(model, model.joints[ji]);
+    for (int r = 0; r < n; ++r) owner[r0 + r] = {false, static_cast<int>(ji)};
+  }
+  for (size_t d = 0; d < model.drivers.size(); ++d)
+    owner[ws.row_of_driver[d]] = {true, static_cast<int>(d)};
+  return owner;
+}
+
+std::string owner_name(const Model& model, const RowOwner& o) {
+  return o.driver ? "driver '" + model.drivers[o.index].name + "'"
+                  : "joint '" + model.joints[o.index].name + "'";
+}
+
+/// Rows kept in order (greedy, modified Gram–Schmidt with reorthogonalisation): row i is
+/// redundant when its component outside the span of the rows kept before it is at most
+/// kRedundancyTolerance of its norm.
+std::vector<bool> independent_rows(const Eigen::MatrixXd& phi_q) {
+  const int m = static_cast<int>(phi_q.rows());
+  std::vector<bool> keep(m, false);
+  std::vector<Eigen::VectorXd> basis;
+  for (int i = 0; i < m; ++i) {
+    Eigen::VectorXd v = phi_q.row(i).transpose();
+    const double n0 = v.norm();
+    if (!(n0 > 0.0)) continue;
+    for (int pass = 0; pass < 2; ++pass)
+      for (const auto& q : basis) v -= q.dot(v) * q;
+    const double n = v.norm();
+    if (n > kRedundancyTolerance * n0) {
+      keep[i] = true;
+      basis.push_back(v / n);
+    }
+  }
+  return keep;
+}
+
+/// Whether `rows` (of phi_q) restricted to body block `bl` are independent, well conditioned.
+bool independent_on_block(const Eigen::MatrixXd& phi_q, const std::vector<int>& rows,
+                          const BodyBlock& bl) {
+  if (static_cast<int>(rows.size()) > bl.size) return false;
+  Eigen::MatrixXd a(rows.size(), bl.size);
+  for (size_t r = 0; r < rows.size(); ++r) {
+    a.row(r) = phi_q.row(rows[r]).segment(bl.offset, bl.size);
+    const double n = a.row(r).norm();
+    if (!(n > 0.0)) return false;
+    a.row(r) /= n;
+  }
+  const Eigen::VectorXd sv = Eigen::JacobiSVD<Eigen::MatrixXd>(a).singularValues();
+  return sv[sv.size() - 1] >= kAnchorConditioning;
+}
+
+}  // namespace
+
+/// The solver's rows, order and pattern; with `late`, every row is anchored to the last of its
+/// bodies in the order.
+static void build_solver(const Model& model, Workspace& ws, const Eigen::MatrixXd& phi_q, bool late) {
+  auto s = std::make_unique<ConstraintSolver>();
+  const int nq = ws.nq, m = ws.m;
+  const std::vector<RowOwner> owner = row_owners(model, ws);
+
+  // Redundant rows: dropped, named in a warning (a driver's: refused).
+  const std::vector<bool> keep = independent_rows(phi_q);
+  for (int i = 0; i < m; ++i)
+    if (keep[i]) s->active.push_back(i);
+  ws.warnings.clear();
+  if (static_cast<int>(s->active.size()) < m) {
+    // Which kept rows span each dropped one: the least-squares combination of the kept rows.
+    Eigen::MatrixXd kept(nq, s->active.size());
+    for (size_t a = 0; a < s->active.size(); ++a) kept.col(a) = phi_q.row(s->active[a]).transpose();
+    const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(kept);
+    for (int i = 0; i < m;) {
+      // All rows of one element together.
+      int end = i;
+      while (end < m && owner[end].driver == owner[i].driver && owner[end].index == owner[i].index)
+        ++end;
+      int dropped = 0;
+      std::vector<bool> with(m, false);
+      for (int r = i; r < end; ++r) {
+        if (keep[r]) continue;
+        ++dropped;
+        const Eigen::VectorXd c = qr.solve(Eigen::VectorXd(phi_q.row(r).transpose()));
+        const double cmax = c.cwiseAbs().maxCoeff();
+        for (size_t a = 0; a < s->active.size(); ++a)
+          if (std::abs(c[a]) > 1e-9 * cmax) with[s->active[a]] = true;
+      }
+      if (dropped > 0) {
+        std::string names;
+        RowOwner last{true, -1};
+        int count = 0;
+        for (int r = 0; r < m; ++r) {
+          if (!with[r] || (owner[r].driver == last.driver && owner[r].index == last.index)) continue;
+          last = owner[r];
+          names += (count++ ? ", " : "") + owner_name(model, owner[r]);
+        }
+        const std::string what = owner_name(model, owner[i]);
+        if (owner[i].driver)
+          throw std::runtime_error(what + ": its equation is redundant with " + names +
+                                   ": the motion it prescribes is already fixed; remove the "
+                                   "driver or one of those joints");
+        ws.warnings.push_back(what + ": " + std::to_string(dropped) + " of its " +
+                              std::to_string(end - i) + " equations " +
+                              (dropped == 1 ? "is" : "are") + " redundant with " + names +
+                              "; the motion is computed without " +
+                              (dropped == 1 ? "it" : "them") +
+                              ", and the reaction reported for this joint is that of its other "
+                              "equations (0 on the dropped ones)");
+      }
+      i = end;
+    }
+  }
+  const int ma = static_cast<int>(s->active.size());
+
+  // The regularisation's scale: the largest diagonal entry of W.
+  s->scale = 0.0;
+  for (int a = 0; a < ma; ++a)
+    s->scale = std::max(s->scale, phi_q.row(s->active[a]).cwiseAbs2().dot(ws.minv.transpose()));
+  if (!(s->scale > 0.0)) s->scale = 1.0;
+  s->epsilon = kRegularisation * s->scale;
+
+  // Body order: approximate minimum degree on the graph of bodies coupled by a row.
+  const int nb = ws.nb;
+  std::vector<int> body_order(nb);
+  {
+    std::vector<Eigen::Triplet<double>> t;
+    for (int b = 0; b < nb; ++b) t.emplace_back(b, b, 1.0);
+    for (int a = 0; a < ma; ++a) {
+      const auto& rb = ws.row_bodies[s->active[a]];
+      if (rb[0] >= 0 && rb[1] >= 0 && rb[0] != rb[1]) {
+        t.emplace_back(rb[0], rb[1], 1.0);
+        t.emplace_back(rb[1], rb[0], 1.0);
+      }
+    }
+    ConstraintSolver::SparseMatrix g(nb, nb);
+    g.setFromTriplets(t.begin(), t.end());
+    Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> p;
+    Eigen::AMDOrdering<int>()(g, p);  // p.indices()[new position] = body
+    for (int i = 0; i < nb; ++i) body_order[i] = p.indices()[i];
+  }
+  std::vector<int> body_rank(nb);
+  for (int i = 0; i < nb; ++i) body_rank[body_order[i]] = i;
+
+  // Anchor the rows of each element to a body. Rows touching one body go to it. An element
+  // coupling two bodies goes to the earlier one when its rows, with the rows already there,
+  // are independent on that body's coordinates (then eliminating it leaves only the later body
+  // coupled: a crank shared by N rods stays a 3-coordinate separator), to the later one
+  // otherwise (its whole row then lies in eliminated coordinates).
+  std::vector<std::vector<int>> anchored(nb);       // active-row indices
+  std::vector<std::vector<int>> anchored_rows(nb);  // the same as rows of phi_q
+  {
+    std::vector<std::pair<int, int>> groups;  // [first, end) in active-row indices
+    for (int a = 0; a < ma;) {
+      int e = a + 1;
+      while (e < ma && owner[s->active[e]].driver == owner[s->active[a]].driver &&
+             owner[s->active[e]].index == owner[s->active[a]].index)
+        ++e;
+      groups.emplace_back(a, e);
+      a = e;
+    }
+    auto bodies_of = [&](int a) {
+      std::vector<int> bodies;
+      for (int b : ws.row_bodies[s->active[a]])
+        if (b >= 0 && std::find(bodies.begin(), bodies.end(), b) == bodies.end())
+          bodies.push_back(b);
+      std::sort(bodies.begin(), bodies.end(),
+                [&](int x, int y) { return body_rank[x] < body_rank[y]; });
+      return bodies;
+    };
+    auto anchor = [&](const std::pair<int, int>& gr, int b) {
+      for (int a = gr.first; a < gr.second; ++a) {
+        anchored[b].push_back(a);
+        anchored_rows[b].push_back(s->active[a]);
+      }
+    };
+    for (int pass = 0; pass < 2; ++pass)  // one-body elements first: they have no choice
+      for (const auto& gr : groups) {
+        const std::vector<int> bodies = bodies_of(gr.first);
+        if ((bodies.size() == 1) != (pass == 0)) continue;
+        int chosen = bodies.back();
+        if (bodies.size() == 2) {
+          std::vector<int> rows = anchored_rows[bodies[0]];
+          for (int a = gr.first; a < gr.second; ++a) rows.push_back(s->active[a]);
+          if (!late && independent_on_block(phi_q, rows, ws.blocks[bodies[0]])) chosen = bodies[0];
+        }
+        anchor(gr, chosen);
+      }
+    for (auto& v : anchored) std::sort(v.begin(), v.end());
+  }
+
+  // Elimination order: per body, its coordinates, then its anchored rows.
+  const int n = nq + ma;
+  s->pos.assign(n, -1);
+  int next = 0;
+  for (int b : body_order) {
+    const BodyBlock& bl = ws.blocks[b];
+    for (int k = bl.offset; k < bl.offset + bl.size; ++k) s->pos[k] = next++;
+    for (int a : anchored[b]) s->pos[nq + a] = next++;
+  }
+
+  // Pattern of the upper triangle in that order: the diagonal, and Φ_q's blocks.
+  std::vector<Eigen::Triplet<double>> t;
+  for (int v = 0; v < n; ++v) t.emplace_back(s->pos[v], s->pos[v], 1.0);
+  for (int a = 0; a < ma; ++a)
+    for (int b : ws.row_bodies[s->active[a]]) {
+      if (b < 0) continue;
+      const BodyBlock& bl = ws.blocks[b];
+      for (int k = bl.offset; k < bl.offset + bl.size; ++k) {
+        const int i = s->pos[k], j = s->pos[nq + a];
+        t.emplace_back(std::min(i, j), std::max(i, j), 0.0);
+      }
+    }
+  s->k.resize(n, n);
+  s->k.setFromTriplets(t.begin(), t.end());
+  s->k.makeCompressed();
+  auto slot = [&](int u, int v) {
+    const int i = std::min(s->pos[u], s->pos[v]), j = std::max(s->pos[u], s->pos[v]);
+    return static_cast<int>(&s->k.coeffRef(i, j) - s->k.valuePtr());
+  };
+  s->k.coeffs().setZero();
+  for (int k = 0; k < nq; ++k) s->k.valuePtr()[slot(k, k)] = 1.0 / ws.minv[k];
+  for (int a = 0; a < ma; ++a) {
+    s->slot_reg.push_back(slot(nq + a, nq + a));
+    s->phi_begin.push_back(static_cast<int>(s->phi_col.size()));
+    const auto& rb = ws.row_bodies[s->active[a]];
+    for (int bi = 0; bi < 2; ++bi) {
+      const int b = rb[bi];
+      if (b < 0 || (bi == 1 && b == rb[0])) continue;
+      const BodyBlock& bl = ws.blocks[b];
+      for (int k = bl.offset; k < bl.offset + bl.size; ++k) {
+        s->phi_col.push_back(k);
+        s->phi_slot.push_back(slot(k, nq + a));
+      }
+    }
+  }
+  s->phi_begin.push_back(static_cast<int>(s->phi_col.size()));
+  s->ldlt.analyzePattern(s->k);
+  s->b.resize(n);
+  s->x.resize(n);
+  ws.lambda.setZero();
+  ws.solver = std::move(s);
+}
+
+void prepare_constraint_solver(const Model& model, Workspace& ws, const Eigen::MatrixXd& phi_q) {
+  build_solver(model, ws, phi_q, false);
+  // Safety net: a row pivot near 0 at assembly means an anchoring to an earlier body left a
+  // leading block nearly singular; then every row goes after all of its bodies (safe whenever
+  // the rows are independent, at the price of more fill).
+  ConstraintSolver& s = *ws.solver;
+  const int nq = ws.nq, ma = static_cast<int>(s.active.size());
+  if (ma == 0) return;
+  double* v = s.k.valuePtr();
+  for (int a = 0; a < ma; ++a) {
+    for (int e = s.phi_begin[a]; e < s.phi_begin[a + 1]; ++e)
+      v[s.phi_slot[e]] = phi_q(s.active[a], s.phi_col[e]);
+    v[s.slot_reg[a]] = -s.epsilon;
+  }
+  s.ldlt.factorize_in_place(s.k);
+  bool ok = s.ldlt.info() == Eigen::Success;
+  for (int a = 0; a < ma && ok; ++a) ok = -s.ldlt.diagonal()[s.pos[nq + a]] > 1e-10 * s.scale;
+  if (!ok) {
+    const std::vector<std::string> warnings = ws.warnings;
+    build_solver(model, ws, phi_q, true);
+    ws.warnings = warnings;
+  }
+}
+
+bool solve_constraints(Workspace& ws) {
+  ConstraintSolver& s = *ws.solver;
+  const int nq = ws.nq, ma = static_cast<int>(s.active.size());
+  double* v = s.k.valuePtr();
+  for (int a = 0; a < ma; ++a) {
+    const int row = s.active[a];
+    for (int e = s.phi_begin[a]; e < s.phi_begin[a + 1]; ++e) v[s.phi_slot[e]] = ws.phi_q(row, s.phi_col[e]);
+    s.b[s.pos[nq + a]] = ws.rhs_m[row];
+  }
+  for (int k = 0; k < nq; ++k) s.b[s.pos[k]] = ws.g[k];
+  // Factor; a pivot of the wrong sign (the quasi-definite inertia lost to round-off: W singular
+  // to working precision) repeats it with a larger ε.
+  double eps = s.epsilon;
+  bool ok = false;
+  for (int attempt = 0; attempt <= kRegularisationSteps && !ok; ++attempt) {
+    if (attempt > 0) {
+      eps *= kRegularisationGrowth;
+      ++s.regularised;
+    }
+    for (int a = 0; a < ma; ++a) v[s.slot_reg[a]] = -eps;
+    s.ldlt.factorize_in_place(s.k);
+    ok = s.ldlt.info() == Eigen::Success;
+    if (!ok) continue;
+    const Eigen::VectorXd& d = s.ldlt.diagonal();
+    for (int k = 0; k < nq && ok; ++k) ok = d[s.pos[k]] > 0.0;
+    for (int a = 0; a < ma && ok; ++a) ok = d[s.pos[nq + a]] < 0.0;
+  }
+  if (!ok) return false;
+  s.x = s.ldlt.solve(s.b);
+  for (int k = 0; k < nq; ++k) ws.qdd[k] = s.x[s.pos[k]];
+  for (int a = 0; a < ma; ++a) ws.lambda[s.active[a]] = -s.x[s.pos[nq + a]];
+  return true;
+}
+
+}  // namespace lash

@@ -1,0 +1,253 @@
+// The sparse constraint solver against a dense solve of the same system, and the redundancy
+// handling of assembly.
+#include <Eigen/Cholesky>
+#include <Eigen/Dense>
+#include <filesystem>
+
+#include "test_support.hpp"
+
+using namespace lash;
+using namespace lash::test;
+
+namespace {
+
+/// Every model file in examples/.
+std::vector<std::string> example_files() {
+  std::vector<std::string> files;
+  for (const auto& e : std::filesystem::directory_iterator(std::string(LASH_SOURCE_DIR) + "/examples"))
+    if (e.path().extension() == ".yaml") files.push_back(e.path().string());
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
+/// The same solve done densely from the evaluated workspace: W = Φ_a M⁻¹ Φ_aᵀ over the active
+/// rows, (W + εI) λ = γ_B − Φ_a M⁻¹ g by Eigen's dense LDLᵀ, q̈ = M⁻¹ (g + Φ_aᵀ λ).
+struct DenseSolve {
+  Eigen::VectorXd lambda, qdd;  // lambda over all rows (0 on dropped ones)
+};
+DenseSolve dense_solve(const Workspace& ws, double epsilon) {
+  const std::vector<int>& active = ws.solver->active;
+  const int ma = static_cast<int>(active.size());
+  Eigen::MatrixXd phi(ma, ws.nq);
+  Eigen::VectorXd rhs(ma);
+  for (int a = 0; a < ma; ++a) {
+    phi.row(a) = ws.phi_q.row(active[a]);
+    rhs[a] = ws.rhs_m[active[a]];
+  }
+  const Eigen::MatrixXd w =
+      phi * ws.minv.asDiagonal() * phi.transpose() + epsilon * Eigen::MatrixXd::Identity(ma, ma);
+  rhs -= phi * ws.minv.cwiseProduct(ws.g);
+  const Eigen::VectorXd la = w.ldlt().solve(rhs);
+  DenseSolve d;
+  d.lambda = Eigen::VectorXd::Zero(ws.m);
+  for (int a = 0; a < ma; ++a) d.lambda[active[a]] = la[a];
+  d.qdd = ws.minv.cwiseProduct(ws.g + phi.transpose() * la);
+  return d;
+}
+
+/// Largest |a − b| relative to the largest |b| (or absolute, below 1).
+double rel_diff(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+  return (a - b).cwiseAbs().maxCoeff() / std::max(1.0, b.cwiseAbs().maxCoeff());
+}
+
+/// Records the sparse and dense solutions at every output of a run.
+class Compare : public Observer {
+ public:
+  void output(double, const Eigen::VectorXd&, const Workspace& ws) override {
+    const DenseSolve d = dense_solve(ws, ws.solver->epsilon);
+    lambda = std::max(lambda, rel_diff(ws.lambda, d.lambda));
+    qdd = std::max(qdd, rel_diff(ws.qdd, d.qdd));
+    // Without the regularisation: within the bound ε/σ_min(W) of constraint_solver.hpp (relative
+    // to |λ|), with room for round-off.
+    const DenseSolve exact = dense_solve(ws, 0.0);
+    Eigen::MatrixXd phi(ws.solver->active.size(), ws.nq);
+    for (size_t a = 0; a < ws.solver->active.size(); ++a) phi.row(a) = ws.phi_q.row(ws.solver->active[a]);
+    const Eigen::VectorXd ev =
+        Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(phi * ws.minv.asDiagonal() * phi.transpose())
+            .eigenvalues();
+    const double bound = ws.solver->epsilon / ev[0];
+    const double err = (ws.lambda - exact.lambda).norm() / exact.lambda.norm();
+    bound_ratio = std::max(bound_ratio, err / (bound + 1e-13));
+    condition = std::max(condition, ev[ev.size() - 1] / ev[0]);
+    ++outputs;
+  }
+  double lambda = 0, qdd = 0, bound_ratio = 0, condition = 0;
+  int outputs = 0;
+};
+
+}  // namespace
+
+TEST(ConstraintSolver, SparseAndDenseFactorisationsAgreeOnEveryExample) {
+  // Every example, at every output of its first 2 ms: λ and q̈ of the sparse LDLᵀ of the
+  // augmented system against a dense LDLᵀ of the regularised Schur complement.
+  const std::vector<std::string> files = example_files();
+  ASSERT_GE(files.size(), 5u);
+  for (const std::string& f : files) {
+    SCOPED_TRACE(f);
+    Model m = load_model_file(f).model;
+    m.solver.end_time = 2e-3;
+    m.solver.output_interval = 1e-4;
+    Workspace ws(m);
+    Compare c;
+    const RunResult r = simulate(m, ws, c);
+    ASSERT_TRUE(r.status.ok) << r.status.message;
+    EXPECT_EQ(c.outputs, 21);
+    EXPECT_LT(c.lambda, 1e-11);
+    EXPECT_LT(c.qdd, 1e-11);
+    EXPECT_LT(c.bound_ratio, 1.0);
+    EXPECT_LT(c.condition, 1e5);  // so the regularisation's bound is below 1e-9 (constraint_solver.hpp)
+    EXPECT_EQ(ws.solver->regularised, 0);
+  }
+}
+
+
+namespace {
+
+/// A parallelogram linkage under gravity: `cranks` unit cranks (mass m, inertia I about the
+/// centre) pivoted on the ground at x = 0, 1, 2, … and pinned to one rigid coupler, released at
+/// rest at −30° (it swings between −30° and −150°, clear of the in-line positions 0 and 180°).
+/// With three cranks one equation is redundant. `first_crank_scale` multiplies the
+/// first crank's mass and inertia: every crank has the same angle, speed and height, so two
+/// cranks with the first doubled move exactly as three.
+std::string parallelogram_yaml(int cranks, double first_crank_scale, double th = -M_PI / 6) {
+  const double c = std::cos(th), s = std::sin(th), m = 1.0, inertia = 1.0 / 12;
+  std::string y = "gravity: [0, -9.81]\nground:\n  markers: {";
+  for (int i = 0; i < cranks; ++i) y += (i ? ", G" : "G") + std::to_string(i) + ": [" + std::to_string(i) + ", 0]";
+  y += "}\nbodies:\n";
+  for (int i = 0; i < cranks; ++i) {
+    const double k = i == 0 ? first_crank_scale : 1.0;
+    y += "  crank_" + std::to_string(i) + ": {mass: " + std::to_string(k * m) +
+         ", inertia: " + std::to_string(k * inertia) + ", position: [" + std::to_string(i + 0.5 * c) +
+         ", " + std::to_string(0.5 * s) + "], angle: " + std::to_string(th) +
+         ", markers: {O: [-0.5, 0], A: [0.5, 0]}}\n";
+  }
+  const double half = 0.5 * (cranks - 1);
+  y += "  coupler: {mass: 2, inertia: 0.5, position: [" + std::to_string(half + c) + ", " +
+       std::to_string(s) + "], markers: {";
+  for (int i = 0; i < cranks; ++i) y += (i ? ", P" : "P") + std::to_string(i) + ": [" + std::to_string(i - half) + ", 0]";
+  y += "}}\njoints:\n";
+  for (int i = 0; i < cranks; ++i) {
+    const std::string n = std::to_string(i);
+    y += "  pivot_" + n + ": {type: revolute, journal: crank_" + n + ".O, bearing: ground.G" + n + "}\n";
+    y += "  coupler_" + n + ": {type: revolute, journal: crank_" + n + ".A, bearing: coupler.P" + n + "}\n";
+  }
+  y += "solver: {end_time: 2, output_interval: 0.01, rtol: 1.0e-9, atol: 1.0e-12}\n";
+  return y;
+}
+
+}  // namespace
+
+TEST(Redundancy, RedundantJointEquationsAreDroppedAndNamed) {
+  const Model m = load_model_text(parallelogram_yaml(3, 1.0), "p3.yaml").model;
+  Workspace ws(m);
+  initial_state(m, ws);
+  ASSERT_EQ(ws.m, 12);
+  EXPECT_EQ(ws.solver->active.size(), 11u);
+  ASSERT_EQ(ws.warnings.size(), 1u);
+  const std::string& w = ws.warnings[0];
+  EXPECT_EQ(w.rfind("joint 'coupler_2': 1 of its 2 equations is redundant with ", 0), 0u) << w;
+  EXPECT_NE(w.find("joint 'pivot_0'"), std::string::npos) << w;
+  EXPECT_NE(w.find("joint 'coupler_1'"), std::string::npos) << w;
+}
+
+TEST(Redundancy, RedundantDoubleParallelogramMovesAsTheNonRedundantOne) {
+  // Three cranks (one equation dropped) against two with the first crank doubled: the same
+  // motion to the integration tolerance, and the same total vertical reaction on the ground.
+  const SimRun three = run_text(parallelogram_yaml(3, 1.0));
+  const SimRun two = run_text(parallelogram_yaml(2, 2.0));
+  const SimRun plain = run_text(parallelogram_yaml(2, 1.0));  // a lighter mechanism
+  ASSERT_TRUE(three.result.status.ok) << three.result.status.message;
+  ASSERT_TRUE(two.result.status.ok) << two.result.status.message;
+  const auto& phi3 = (*three.rec)["crank_0.phi"];
+  const auto& phi2 = (*two.rec)["crank_0.phi"];
+  const auto& phi_plain = (*plain.rec)["crank_0.phi"];
+  ASSERT_EQ(phi3.size(), phi2.size());
+  double diff = 0, swing = 0, diff_plain = 0;
+  for (size_t i = 0; i < phi3.size(); ++i) {
+    diff = std::max(diff, std::abs(phi3[i] - phi2[i]));
+    diff_plain = std::max(diff_plain, std::abs(phi3[i] - phi_plain[i]));
+    swing = std::max(swing, std::abs(phi3[i] - phi3[0]));
+  }
+  EXPECT_GT(swing, 2.0);  // through the bottom to −150°
+  EXPECT_LT(diff, 1e-5);  // measured 8.6e-7 at rtol 1e-9
+  EXPECT_GT(diff_plain, 1e-2);  // the comparison can tell mechanisms apart
+  // Total vertical ground reaction on the pivots (the dropped equation carries none).
+  double dfy = 0;
+  for (size_t i = 0; i < phi3.size(); ++i) {
+    const double fy3 = (*three.rec)["pivot_0.Fy"][i] + (*three.rec)["pivot_1.Fy"][i] + (*three.rec)["pivot_2.Fy"][i];
+    const double fy2 = (*two.rec)["pivot_0.Fy"][i] + (*two.rec)["pivot_1.Fy"][i];
+    dfy = std::max(dfy, std::abs(fy3 - fy2));
+  }
+  EXPECT_LT(dfy, 1e-3);  // N, of about 60 N; measured 6.6e-5
+  // Energy is conserved: no drivers or loads, so input and stabilization stay ≈ 0.
+  const auto& bal = (*three.rec)["energy.balance"];
+  for (double b : bal) EXPECT_NEAR(b, bal.front(), 1e-6);
+}
+
+TEST(Singular, ParallelogramPassesItsInLinePositionsWithBothIntegrators) {
+  // Unit links, released at rest at 60°: the cranks swing through the in-line positions 0 and
+  // 180°, where Φ_q loses rank (the parallelogram meets its antiparallelogram branch), twice per
+  // swing, for 10 s. No drivers or loads: input stays 0, energy (balance) stays constant to the
+  // integration tolerance, and the coupler keeps translating (angle 0: the parallelogram branch).
+  for (const char* integrator : {"dopri5", "bdf"}) {
+    SCOPED_TRACE(integrator);
+    const std::string model = parallelogram_yaml(2, 1.0, M_PI / 3);
+    const SimRun r = run_text(model, {"solver.end_time=10", std::string("solver.integrator=") + integrator,
+                                      "solver.rtol=1e-8", "solver.atol=1e-10"});
+    ASSERT_TRUE(r.result.status.ok) << r.result.status.message;
+    const auto& phi = (*r.rec)["crank_0.phi"];
+    int crossings = 0;  // through 0 or ±180° (sin φ changes sign)
+    for (size_t i = 1; i < phi.size(); ++i) crossings += std::sin(phi[i]) * std::sin(phi[i - 1]) < 0;
+    EXPECT_GE(crossings, 8);
+    double max_ke = 0, drift = 0, coupler = 0;
+    const auto& bal = (*r.rec)["energy.balance"];
+    for (size_t i = 0; i < bal.size(); ++i) {
+      max_ke = std::max(max_ke, (*r.rec)["energy.kinetic"][i]);
+      drift = std::max(drift, std::abs(bal[i] - bal[0]));
+      coupler = std::max(coupler, std::abs((*r.rec)["coupler.phi"][i]));
+      EXPECT_EQ((*r.rec)["energy.input"][i], 0.0);
+    }
+    EXPECT_GT(max_ke, 10.0);
+    EXPECT_LT(drift / max_ke, 1e-4);
+    EXPECT_LT(coupler, 1e-4);
+  }
+}
+
+TEST(Singular, IsoscelesSliderCrankPassesItsToggleWithBothIntegrators) {
+  // Crank and rod of equal length a: at crank angles ±90° the rod folds onto the crank and the
+  // slider reaches the pivot, where Φ_q loses rank (the slider could stay there while the crank
+  // turns). Driven at one revolution per second, the slider keeps the closed form
+  // x = 2a cos ωt through 20 toggles, and energy balances with the driver's input.
+  const double a = 0.5, w = 2 * M_PI;
+  const std::string yaml = R"Y(
+gravity: [0, -9.81]
+ground: {markers: {O: [0, 0]}}
+bodies:
+  crank: {mass: 1, inertia: 0.02, position: [0.25, 0], markers: {O: [-0.25, 0], A: [0.25, 0]}}
+  rod: {mass: 1, inertia: 0.02, position: [0.75, 0], markers: {A: [-0.25, 0], B: [0.25, 0]}}
+  slider: {mass: 0.5, inertia: 0.01, position: [1.0, 0], markers: {O: [0, 0]}}
+joints:
+  pivot: {type: revolute, journal: crank.O, bearing: ground.O}
+  crank_rod: {type: revolute, journal: crank.A, bearing: rod.A}
+  rod_slider: {type: revolute, journal: rod.B, bearing: slider.O}
+  guide: {type: translational, guide: ground.O, slider: slider.O, axis: [1, 0]}
+drivers:
+  crank: {joint: pivot, speed: 6.283185307179586}
+solver: {end_time: 10, output_interval: 0.01, rtol: 1.0e-8, atol: 1.0e-10}
+)Y";
+  for (const char* integrator : {"dopri5", "bdf"}) {
+    SCOPED_TRACE(integrator);
+    const SimRun r = run_text(yaml, {std::string("solver.integrator=") + integrator});
+    ASSERT_TRUE(r.result.status.ok) << r.result.status.message;
+    double err = 0, drift = 0, max_ke = 0;
+    const auto& bal = (*r.rec)["energy.balance"];
+    for (size_t i = 0; i < r.rec->time.size(); ++i) {
+      err = std::max(err, std::abs((*r.rec)["slider.x"][i] - 2 * a * std::cos(w * r.rec->time[i])));
+      drift = std::max(drift, std::abs(bal[i] - bal[0]));
+      max_ke = std::max(max_ke, (*r.rec)["energy.kinetic"][i]);
+    }
+    EXPECT_LT(err, 1e-5);
+    EXPECT_GT(max_ke, 1.0);
+    EXPECT_LT(drift / max_ke, 1e-4);
+  }
+}
