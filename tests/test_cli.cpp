@@ -527,6 +527,14 @@ TEST(Cli, OutputFolderNamesRunNoCommands) {
   EXPECT_TRUE(fs::exists(out / "report.html"));
   EXPECT_FALSE(fs::exists(dir / "PWNED"));
   EXPECT_FALSE(fs::exists(dir / "PWNED2"));
+  // A folder named like an option: the figures tool gets an absolute path, not "-h".
+  const Result dash = run_lash_raw("cd '" + dir.string() + "' && " + std::string(LASH_BINARY) + " run " +
+                                   example() + " -q --report --set solver.end_time=0.003 --output=-h");
+  ASSERT_EQ(dash.code, 0) << dash.out;
+  if (std::system("/usr/bin/python3 -c 'import matplotlib' 2>/dev/null") == 0) {
+    EXPECT_TRUE(fs::exists(dir / "-h" / "figures" / "acceleration_peak.png"))
+        << lash::test::read_file((dir / "-h" / "figures.log").string());
+  }
   if (fs::exists("/usr/bin/python3") && std::system("/usr/bin/python3 -c 'import matplotlib' 2>/dev/null") == 0) {
     EXPECT_NE(r.out.find("figures failed"), 0u);
     EXPECT_TRUE(fs::exists(out / "figures")) << lash::test::read_file((out / "figures.log").string());
@@ -559,7 +567,14 @@ TEST(Cli, AFolderHoldsOneRunAtATime) {
                                (dir / "final_state.json").string());
   EXPECT_EQ(same.code, 2) << same.out;
   EXPECT_NE(same.out.find("whose files this run replaces"), std::string::npos) << same.out;
+  // The same through a symbolic link to the state file elsewhere.
+  fs::create_directories(dir.string() + "_links");
+  fs::create_symlink(dir / "final_state.json", dir.string() + "_links/s.json");
+  const Result linked = run_lash("run " + example() + " -q -o " + dir.string() +
+                                 " --set solver.end_time=0.6 --from " + dir.string() + "_links/s.json");
+  EXPECT_EQ(linked.code, 2) << linked.out;
   EXPECT_EQ(read_summary(dir)["solver"]["end_time"].get<double>(), 0.5);
+  fs::remove_all(dir.string() + "_links");
   fs::remove_all(dir);
 }
 
@@ -632,5 +647,57 @@ TEST(Cli, TheSameRunGetsTheSameVerdictEverywhere) {
   EXPECT_NE(analyze.out.find("verdict: " + in_summary["class"].get<std::string>()), std::string::npos);
   EXPECT_NE(analyze.out.find("rule: after the transient, with at least 16 Poincaré sections"),
             std::string::npos) << analyze.out;
+  fs::remove_all(dir);
+}
+
+TEST(Cli, ARunRemovesOnlyWhatLashWrote) {
+  // A user's figures/ folder in the output folder (no .lash-figures mark) is not deleted: the run
+  // is refused (exit 2) and the folder and its file survive. A failed assembly leaves an earlier
+  // run's results untouched.
+  const fs::path dir = temp_dir("keep");
+  fs::create_directories(dir / "figures");
+  std::ofstream(dir / "figures" / "fig1.pdf") << "mine";
+  Result r = run_lash("run " + example() + " -q -o " + dir.string() + " --set solver.end_time=0.002");
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("figures: a folder that lash did not write is in the way"), std::string::npos) << r.out;
+  EXPECT_EQ(lash::test::read_file((dir / "figures" / "fig1.pdf").string()), "mine");
+  fs::remove_all(dir / "figures");
+  // A run with its report: the figures are lash's and the next run replaces them.
+  r = run_lash("run " + example() + " -q --report -o " + dir.string() + " --set solver.end_time=0.002");
+  ASSERT_EQ(r.code, 0) << r.out;
+  ASSERT_TRUE(fs::exists(dir / "figures" / ".lash-figures"));
+  r = run_lash("run " + example() + " -q -o " + dir.string() + " --set solver.end_time=0.003");
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_FALSE(fs::exists(dir / "figures"));
+  EXPECT_FALSE(fs::exists(dir / "report.html")) << "a report of the earlier run beside new results";
+  // A model that cannot be assembled: exit 2, and the earlier results are all still there.
+  const std::string before = lash::test::read_file((dir / "summary.json").string());
+  r = run_lash("run " + example() + " -q -o " + dir.string() +
+               " --set ground.markers.G=[0,1] --set joints.slider_guide.guide=ground.G");
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("is unchanged"), std::string::npos) << r.out;
+  EXPECT_EQ(lash::test::read_file((dir / "summary.json").string()), before);
+  expect_whole_rows(dir / "timeseries.csv");
+  EXPECT_EQ(read_summary(dir)["integrator"]["outputs"].get<long>() + 1,
+            static_cast<long>(line_count(dir / "timeseries.csv")));
+  fs::remove_all(dir);
+}
+
+TEST(Cli, SignalsAfterTheRunAndIgnoredSignals) {
+  const fs::path dir = temp_dir("late_signal");
+  // SIGTERM during run --report: whether it lands in the run or in the analyses after it, the
+  // command exits 130, summary.json says interrupted, and no report stands beside the results.
+  Result r = run_lash_raw("timeout --preserve-status -s TERM 2 " + std::string(LASH_BINARY) + " run " +
+                          example() + " -q --report -o " + dir.string() + " --set solver.end_time=0.3");
+  EXPECT_EQ(r.code, 130) << r.out;
+  EXPECT_EQ(read_summary(dir)["status"]["outcome"], "interrupted");
+  EXPECT_FALSE(fs::exists(dir / "report.html"));
+  expect_whole_rows(dir / "timeseries.csv");
+  // A SIGHUP the parent ignores (nohup) stays ignored: the run completes.
+  r = run_lash_raw("sh -c \"trap '' HUP; exec " + std::string(LASH_BINARY) + " run " + example() +
+                   " -q -o " + dir.string() + " --set solver.end_time=1\" & p=$!; sleep 0.3; "
+                   "kill -HUP $p || exit 97; wait $p");  // 97: it ended before the signal
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_EQ(read_summary(dir)["status"]["outcome"], "completed");
   fs::remove_all(dir);
 }

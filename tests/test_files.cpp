@@ -113,6 +113,12 @@ TEST(Files, AFolderLockRefusesASecondOwnerAndIsReleasedWithIt) {
     }
   }
   EXPECT_NO_THROW(lash::FolderLock again((dir / "run").string()));
+  // A planted symbolic link is refused, and its target keeps its text.
+  fs::create_directories(dir / "linked");
+  std::ofstream(dir / "precious.txt") << "precious";
+  fs::create_symlink(dir / "precious.txt", dir / "linked" / ".lash.lock");
+  EXPECT_THROW(lash::FolderLock((dir / "linked").string()), lash::IoError);
+  EXPECT_EQ(lash::test::read_file((dir / "precious.txt").string()), "precious");
   fs::remove_all(dir);
 }
 

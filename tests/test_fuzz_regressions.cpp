@@ -76,7 +76,9 @@ TEST_P(FuzzRegression, OnlyModelErrorEscapes) {
            << ": " << e.what();
   }
   // Assembled: a bounded run ends with a status that says what happened.
-  if (assembled) EXPECT_EQ(lash::fuzz::run_contract_violation(loaded.model), "");
+  if (assembled) {
+    EXPECT_EQ(lash::fuzz::run_contract_violation(loaded.model), "");
+  }
 }
 
 TEST(FuzzRegressions, FolderHasInputs) {

@@ -1043,6 +1043,12 @@ def main(argv=None):
                 plt.close("all")
                 continue
             os.makedirs(fig_dir, exist_ok=True)
+            # Marks the folder as lash's own: the next run into OUT_DIR replaces it (a figures/
+            # folder without the mark is a user's and is left alone).
+            marker = os.path.join(fig_dir, ".lash-figures")
+            if not os.path.exists(marker):
+                with open(marker, "w") as f:
+                    f.write("written by lash_figures.py; removed with this folder by the next run\n")
             for fmt in args.formats:
                 path = os.path.join(fig_dir, f"{plan.name}.{fmt}")
                 meta = {"Date": None} if fmt in ("svg", "pdf") else {}

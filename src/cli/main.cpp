@@ -59,13 +59,29 @@ std::atomic<int> g_interrupt{0};
 extern "C" void on_signal(int sig) { g_interrupt.store(sig); }
 
 /// SIGINT, SIGTERM and SIGHUP end the run at its next output, which then writes its summary and
-/// final state like any stopped run; a second signal ends the program at once.
+/// final state like any stopped run; a second signal ends the program at once. A signal the
+/// parent ignores stays ignored (`nohup lash run ...` survives a closed terminal).
 void install_signal_handlers() {
   struct sigaction sa {};
   sa.sa_handler = on_signal;
   sa.sa_flags = SA_RESETHAND;
   sigemptyset(&sa.sa_mask);
-  for (int sig : {SIGINT, SIGTERM, SIGHUP}) sigaction(sig, &sa, nullptr);
+  for (int sig : {SIGINT, SIGTERM, SIGHUP}) {
+    struct sigaction old {};
+    if (sigaction(sig, nullptr, &old) == 0 && old.sa_handler == SIG_IGN) continue;
+    sigaction(sig, &sa, nullptr);
+  }
+}
+
+/// How a run ended, in a sentence ("the run <...> at t = ...").
+const char* ended(lash::RunOutcome o) {
+  switch (o) {
+    case lash::RunOutcome::completed: return "completed";
+    case lash::RunOutcome::failed: return "stopped on a numerical failure";
+    case lash::RunOutcome::interrupted: return "was interrupted";
+    case lash::RunOutcome::write_error: return "stopped on a write error";
+  }
+  return "stopped";
 }
 
 // Exit codes (README, docs/model-format.md).
@@ -283,14 +299,23 @@ int main(int argc, char** argv) {
     try {
       ProgressObserver progress(nullptr, isatty(STDERR_FILENO));
       const lash::RunAnalysis ra = lash::analyze_run(model, ro, &progress);
+      if (const int sig = g_interrupt.load(); sig != 0) {  // during the run or the analyses
+        std::cerr << "\ninterrupted by signal " << sig << "; nothing was written\n";
+        return kExitInterrupted;
+      }
       const nlohmann::json data = lash::report_data(model, ra);
       const int code = exit_code(ra.result.status.outcome);
       if (code != kExitOk)
         std::cerr << "the run stopped at t = " << ra.result.status.t
                   << " s: " << ra.result.status.message << "\n";
-      if (code == kExitInterrupted) return code;  // nothing written
       if (*report) {
         for (const auto& line : lash::write_report(data, run_dir)) std::cout << line << "\n";
+        if (const int sig = g_interrupt.load(); sig != 0) {  // during the figures
+          std::cerr << "\ninterrupted by signal " << sig
+                    << " while the figures were drawn; report.html and report_data.json are "
+                       "complete, figures/ may not be\n";
+          return kExitInterrupted;
+        }
         return code;
       }
       const auto& an = data["analysis"];
@@ -347,7 +372,7 @@ int main(int argc, char** argv) {
     // run it came from lost: continue into another folder.
     namespace fs = std::filesystem;
     std::error_code e1, e2;
-    const fs::path from_dir = fs::weakly_canonical(fs::absolute(from_state).parent_path(), e1);
+    const fs::path from_dir = fs::weakly_canonical(fs::absolute(from_state), e1).parent_path();
     const fs::path to_dir = fs::weakly_canonical(fs::absolute(out_dir), e2);
     if (!e1 && !e2 && from_dir == to_dir) {
       std::cerr << "error: --from " << from_state << " is in the output folder " << out_dir
@@ -370,6 +395,18 @@ int main(int argc, char** argv) {
       return kExitBadInput;
     }
     run_options.from = &start;
+  }
+  if (from_state.empty()) {
+    // A model that cannot be assembled is refused before the output folder is touched, so an
+    // earlier run's results there survive it.
+    try {
+      lash::Workspace probe(model);
+      lash::initial_state(model, probe);
+    } catch (const std::exception& e) {
+      std::cerr << model_path << ": " << e.what() << "\nnothing was run; " << out_dir
+                << "/ is unchanged\n";
+      return kExitBadInput;
+    }
   }
   std::unique_ptr<lash::FolderLock> lock;
   std::unique_ptr<lash::ResultsWriter> writer;
@@ -406,26 +443,40 @@ int main(int argc, char** argv) {
   }
   for (const auto& w : result.warnings) std::cerr << model_path << ": warning: " << w << "\n";
   if (!result.warnings.empty()) writer->add_to_summary("warnings", result.warnings);
+
+  // The report first, summary.json last: a folder with a summary holds everything it promises.
+  // The report covers what was computed, up to a failure too (not after a signal or a write
+  // error).
+  std::vector<std::string> report_notes;
+  bool report_failed = false;
+  const auto outcome = result.status.outcome;
+  if (with_report && g_interrupt.load() == 0 && writer->stop_reason().empty() &&
+      (outcome == lash::RunOutcome::completed || outcome == lash::RunOutcome::failed)) {
+    try {
+      report_notes = lash::write_report(lash::report_data(model, ra), out_dir);
+    } catch (const std::exception& e) {
+      report_notes.push_back(std::string("not written: ") + e.what());
+      report_failed = true;
+    }
+  }
+  if (const int sig = g_interrupt.load(); sig != 0 && result.status.ok) {
+    // The run reached end_time; the signal came during the analyses or the report.
+    result.status.ok = false;
+    result.status.outcome = lash::RunOutcome::interrupted;
+    result.status.message = "interrupted by signal " + std::to_string(sig) +
+                            " after the run, during its analyses or report: timeseries.csv, "
+                            "events.csv and final_state.json are complete, the report is not";
+  }
   lash::RunStatus status;
   try {
     status = writer->finish(result);
   } catch (const std::exception& e) {  // summary.json itself
-    std::cerr << "\nerror: " << e.what() << "\nthe run " << lash::outcome_name(result.status.outcome)
+    std::cerr << "\nerror: " << e.what() << "\nthe run " << ended(result.status.outcome)
               << " at t = " << result.status.t << " s, but its summary could not be written\n";
     return kExitIo;
   }
   int code = exit_code(status.outcome);
-
-  // The report covers what was computed, up to a failure too (not after a signal or a write error).
-  std::vector<std::string> report_notes;
-  if (with_report && (code == kExitOk || code == kExitNumerical)) {
-    try {
-      report_notes = lash::write_report(lash::report_data(model, ra), out_dir);
-    } catch (const lash::IoError& e) {
-      report_notes.push_back(std::string("not written: ") + e.what());
-      code = kExitIo;
-    }
-  }
+  if (report_failed && code == kExitOk) code = kExitIo;
   auto print_notes = [&](std::ostream& os) {
     for (const auto& line : report_notes) os << "report: " << line << "\n";
   };

@@ -21,19 +21,25 @@ namespace {
 std::string errno_text(int err) { return std::strerror(err); }
 
 /// write(2) until done; returns 0 or the errno of the failure (a short write followed by a
-/// failing one reports the failure).
-int write_all(int fd, const char* data, std::size_t n) {
-  while (n > 0) {
-    const ssize_t w = ::write(fd, data, n);
+/// failing one reports the failure). `written` receives the bytes that did reach the file.
+int write_all(int fd, const char* data, std::size_t n, std::size_t* written = nullptr) {
+  std::size_t done = 0;
+  int err = 0;
+  while (done < n) {
+    const ssize_t w = ::write(fd, data + done, n - done);
     if (w < 0) {
       if (errno == EINTR) continue;
-      return errno;
+      err = errno;
+      break;
     }
-    if (w == 0) return EIO;
-    data += w;
-    n -= static_cast<std::size_t>(w);
+    if (w == 0) {
+      err = EIO;
+      break;
+    }
+    done += static_cast<std::size_t>(w);
   }
-  return 0;
+  if (written) *written = done;
+  return err;
 }
 
 /// fsync of the folder holding `path`, so a rename survives a crash of the machine (best effort:
@@ -97,11 +103,18 @@ void RowFile::append(std::string_view rows) {
 
 void RowFile::flush() {
   if (fd_ < 0 || buffer_.empty()) return;
-  const int err = write_all(fd_, buffer_.data(), buffer_.size());
+  std::size_t written = 0;
+  const int err = write_all(fd_, buffer_.data(), buffer_.size(), &written);
   if (err != 0) {
-    // Back to the last whole row: a reader never sees half a row, and the file says what was
-    // computed up to there.
-    if (::ftruncate(fd_, committed_) == 0) ::lseek(fd_, committed_, SEEK_SET);
+    // Back to the last whole row that reached the file: a reader never sees half a row, and the
+    // file keeps every row that fitted.
+    const std::size_t last = written > 0 ? buffer_.rfind('\n', written - 1) : std::string::npos;
+    const std::size_t keep = last == std::string::npos ? 0 : last + 1;
+    if (::ftruncate(fd_, committed_ + static_cast<long long>(keep)) == 0) {
+      committed_ += static_cast<long long>(keep);
+      committed_rows_ += std::count(buffer_.begin(), buffer_.begin() + static_cast<long>(keep), '\n');
+    }
+    ::lseek(fd_, committed_, SEEK_SET);
     buffer_.clear();
     throw IoError(path_, "write failed after " + std::to_string(committed_) +
                              " bytes: " + errno_text(err));
@@ -138,8 +151,12 @@ FolderLock::FolderLock(const std::string& folder) {
   std::filesystem::create_directories(folder, ec);
   if (ec) throw IoError(folder, "cannot create the output folder: " + ec.message());
   const std::string path = folder + "/.lash.lock";
-  fd_ = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
-  if (fd_ < 0) throw IoError(path, "cannot create the lock file: " + errno_text(errno));
+  // O_NOFOLLOW: a planted symbolic link must not make the pid overwrite another file.
+  fd_ = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC | O_NOFOLLOW, 0644);
+  if (fd_ < 0)
+    throw IoError(path, errno == ELOOP ? std::string("is a symbolic link, not a lock file of lash; "
+                                                     "remove it")
+                                       : "cannot create the lock file: " + errno_text(errno));
   if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
     const int err = errno;
     char pid[32] = {};
@@ -161,6 +178,27 @@ FolderLock::FolderLock(const std::string& folder) {
 
 FolderLock::~FolderLock() {
   if (fd_ >= 0) ::close(fd_);  // releases the lock; the file stays (removing it would race)
+}
+
+void remove_earlier_output(const std::string& path, const std::string& marker) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::file_status st = fs::symlink_status(path, ec);
+  if (ec || st.type() == fs::file_type::not_found) return;
+  if (st.type() == fs::file_type::regular || st.type() == fs::file_type::symlink) {
+    if (!fs::remove(path, ec) && ec) throw IoError(path, "cannot remove the earlier run's file: " + ec.message());
+    return;
+  }
+  if (st.type() == fs::file_type::directory && !marker.empty() &&
+      fs::symlink_status(path + "/" + marker, ec).type() == fs::file_type::regular) {
+    fs::remove_all(path, ec);
+    if (ec) throw IoError(path, "cannot remove the earlier run's folder: " + ec.message());
+    return;
+  }
+  throw std::invalid_argument(path + ": " +
+                              (st.type() == fs::file_type::directory ? "a folder" : "not a file") +
+                              " that lash did not write is in the way; it is left alone: move it "
+                              "or choose another output folder");
 }
 
 std::string read_input_file(const std::string& path, std::size_t max_bytes) {

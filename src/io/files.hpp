@@ -77,6 +77,16 @@ class FolderLock {
   int fd_ = -1;
 };
 
+/// Removes what an earlier run left at `path` before a new one writes there: a file or a symbolic
+/// link (never followed); a folder only when it holds `marker` (a file lash put there to say the
+/// folder is its own, e.g. figures/.lash-figures). Anything else — a user's folder of the same
+/// name, a device, a FIFO — is left alone and reported with std::invalid_argument, so no run
+/// deletes what it did not write; IoError when removing fails. Nothing there: nothing to do.
+void remove_earlier_output(const std::string& path, const std::string& marker = "");
+
+/// The file that marks a figures/ folder as written by lash.
+constexpr const char* kFiguresMarker = ".lash-figures";
+
 /// Reads an input file (model, state, summary) whole. Refuses what is not a regular file
 /// (a directory, /dev/zero, a FIFO) and files larger than `max_bytes`, with std::invalid_argument
 /// naming the path; throws IoError when it cannot be read.

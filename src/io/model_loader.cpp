@@ -1098,7 +1098,8 @@ std::optional<BadByte> first_invalid_utf8(std::string_view s) {
     const auto c = static_cast<unsigned char>(s[i]);
     std::size_t n = 0;
     std::uint32_t cp = 0;
-    if (c < 0x80) n = 1, cp = c;
+    if (c == 0) n = 0;  // NUL: not text
+    else if (c < 0x80) n = 1, cp = c;
     else if ((c & 0xE0) == 0xC0) n = 2, cp = c & 0x1F;
     else if ((c & 0xF0) == 0xE0) n = 3, cp = c & 0x0F;
     else if ((c & 0xF8) == 0xF0) n = 4, cp = c & 0x07;
@@ -1140,8 +1141,10 @@ LoadedModel load_model_text(const std::string& text, const std::string& filename
                             const std::vector<std::string>& overrides) {
   if (auto bad = first_invalid_utf8(text))
     throw ModelError({{filename, bad->line, bad->column, "",
-                       "not UTF-8 text (byte " + bad->byte +
-                           "); save the model file with UTF-8 encoding"}});
+                       bad->byte == "0x00"
+                           ? std::string("a NUL byte: not a text file")
+                           : "not UTF-8 text (byte " + bad->byte +
+                                 "); save the model file with UTF-8 encoding"}});
   for (const auto& o : overrides)
     if (auto bad = first_invalid_utf8(o))
       throw ModelError({{"--set", 0, 0, "", "not UTF-8 text (byte " + bad->byte + ") in '" +

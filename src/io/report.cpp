@@ -259,17 +259,24 @@ std::vector<std::string> write_report(const json& data, const std::string& folde
   write_file_atomic(folder + "/report.html", html);
   notes.push_back("wrote " + folder + "/report.html");
   // Figures for papers, with Debian's matplotlib; started without a shell, so no folder name can
-  // run a command.
+  // run a command, and with an absolute path, so no name is read as an option ("-h").
   const std::string script = std::string(LASH_SOURCE_DIR) + "/tools/lash_figures.py";
   const std::string python = "/usr/bin/python3";
+  const std::string figures = folder + "/figures";
   if (!fs::exists(script) || !fs::exists(python)) {
     notes.push_back("figures skipped: " + script + " or " + python + " not found");
-  } else {
-    const int rc = run_program({python, script, folder}, folder + "/figures.log");
-    notes.push_back(rc == 0 ? "wrote " + folder + "/figures/ (see figures.log)"
-                            : "figures failed (exit " + std::to_string(rc) + "), see " + folder +
-                                  "/figures.log");
+    return notes;
   }
+  // An earlier report's figures/ goes (a folder lash did not write stays, and so do they).
+  remove_earlier_output(figures, kFiguresMarker);
+  fs::create_directories(figures, ec);
+  if (ec) throw IoError(figures, "cannot create the folder: " + ec.message());
+  write_file_atomic(figures + "/" + kFiguresMarker,
+                    "written by lash report; removed with this folder by the next run\n");
+  const int rc = run_program({python, script, fs::absolute(folder).string()}, folder + "/figures.log");
+  notes.push_back(rc == 0 ? "wrote " + figures + "/ (see figures.log)"
+                          : "figures failed (exit " + std::to_string(rc) + "), see " + folder +
+                                "/figures.log");
   return notes;
 }
 

@@ -20,8 +20,9 @@ namespace lash {
 nlohmann::json report_data(const Model& model, const RunAnalysis& analysis);
 
 /// Writes report_data.json, report.html (self-contained) and, when Debian's matplotlib is
-/// present, figures/*.png|svg into `folder`. Returns lines describing what was written or why a
-/// part was skipped.
+/// present, figures/*.png|svg into `folder` (an earlier report's figures/ is replaced; a figures/
+/// folder lash did not write is left alone: std::invalid_argument). Returns lines describing
+/// what was written or why a part was skipped; throws IoError when a file cannot be written.
 std::vector<std::string> write_report(const nlohmann::json& data, const std::string& folder);
 
 }  // namespace lash

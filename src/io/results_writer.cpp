@@ -28,10 +28,8 @@ ResultsWriter::ResultsWriter(const Model& model, const std::string& folder,
   std::error_code ec;
   std::filesystem::create_directories(folder, ec);
   if (ec) throw IoError(folder, "cannot create the output folder: " + ec.message());
-  for (const auto& f : run_files()) {
-    std::filesystem::remove_all(folder + "/" + f, ec);
-    if (ec) throw IoError(folder + "/" + f, "cannot remove the earlier run's file: " + ec.message());
-  }
+  for (const auto& f : run_files())
+    remove_earlier_output(folder + "/" + f, f == "figures" ? kFiguresMarker : "");
   write_file_atomic(folder + "/model_resolved.yaml", resolved_yaml_ + "\n");
   ts_ = RowFile(folder + "/timeseries.csv");
   ev_ = RowFile(folder + "/events.csv");

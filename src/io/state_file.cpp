@@ -2,6 +2,7 @@
 
 #include "io/files.hpp"
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -54,6 +55,8 @@ State read_state(const std::string& path, const Model& model, const Workspace& w
   try {
     st.t = j.at("t").get<double>();
     st.step = j.value("step", 0.0);
+    if (!std::isfinite(st.step) || st.step < 0)
+      throw fail("'step' must be a finite step size >= 0 s, got " + j.at("step").dump());
     const auto names = j.at("names").get<std::vector<std::string>>();
     const auto y = j.at("y").get<std::vector<double>>();
     const auto expected = state_names(model, ws);
@@ -78,7 +81,11 @@ State read_state(const std::string& path, const Model& model, const Workspace& w
       if (!modes.contains(name))
         throw fail("the state has no contact mode for clearance joint '" + name +
                    "' (was it a clearance joint in the run that wrote it?)");
-      st.modes.push_back({modes.at(name).get<int>() != 0});
+      const json& mode = modes.at(name);
+      if (!mode.is_number_integer() || (mode.get<int>() != 0 && mode.get<int>() != 1))
+        throw fail("the contact mode of clearance joint '" + name +
+                   "' must be 1 (contact) or 0 (free flight), got " + mode.dump());
+      st.modes.push_back({mode.get<int>() == 1});
     }
     if (static_cast<int>(modes.size()) != ws.nc)
       throw fail("the state has " + std::to_string(modes.size()) +

@@ -226,7 +226,8 @@ int non_harmonic_peaks(const Spectrum& s, double f0) {
 /// oscillation, whose bounded ringing is not divergence), renormalised `intervals` times, every
 /// `interval`.
 LyapunovEstimate lyapunov_from(const Model& model, const Eigen::VectorXd& y_start,
-                               double t_start, double interval, int intervals, double d0_option) {
+                               double t_start, double interval, int intervals, double d0_option,
+                               const std::atomic<int>* interrupt) {
   Workspace w0(model), w1(model);
   Simulator s0(model, w0), s1(model, w1);
   Workspace wp(model);
@@ -234,6 +235,7 @@ LyapunovEstimate lyapunov_from(const Model& model, const Eigen::VectorXd& y_star
   auto flow = [&](int which, Eigen::VectorXd& y, double t0, double t1) {
     // Times are relative to the start of the estimate; the perturbed trajectory restarts
     // from its renormalised state every interval, the reference only once.
+    if (interrupt && interrupt->load() != 0) return false;  // a signal: stop here
     Simulator& sim = which == 0 ? s0 : s1;
     if (which == 1 || t0 == 0.0) {
       if (which == 1) {
@@ -346,8 +348,10 @@ void check_options(const AnalysisOptions& o) {
   }
   if (o.discard_periods < 0 || o.discard_periods > 1000000)
     bad("--discard " + std::to_string(o.discard_periods), "expected a whole number of periods in [0, 1e6]");
-  if (!std::isfinite(o.lyapunov_d0) || o.lyapunov_d0 < 0)
-    bad("--lyapunov-d0 " + fmt_g(o.lyapunov_d0), "expected a separation > 0 m (or 0 for the default)");
+  if (!std::isfinite(o.lyapunov_d0) || o.lyapunov_d0 < 0 || o.lyapunov_d0 > 1e-3)
+    bad("--lyapunov-d0 " + fmt_g(o.lyapunov_d0),
+        "expected a separation > 0 m and at most 1e-3 m, far below the clearance (or 0 for the "
+        "default)");
 }
 
 RunAnalysis analyze_run(const Model& model, const AnalysisOptions& o, Observer* extra) {
@@ -357,6 +361,10 @@ RunAnalysis analyze_run(const Model& model, const AnalysisOptions& o, Observer* 
 
   // The options first: nothing runs when one of them is out of range or names what does not exist.
   check_options(o);
+  if (o.stats_t0 > -1e300 && o.stats_t0 >= s.end_time)
+    throw std::invalid_argument("--window " + fmt_g(o.stats_t0) + "," + fmt_g(o.stats_t1) +
+                                ": starts at or after the run's end_time (" + fmt_g(s.end_time) +
+                                " s)");
   const Driver* drv = period_driver(model, o.poincare_driver);
   if (!o.poincare_driver.empty() && !drv)
     throw std::invalid_argument("--poincare " + o.poincare_driver +
@@ -602,7 +610,7 @@ RunAnalysis analyze_run(const Model& model, const AnalysisOptions& o, Observer* 
     const int intervals = static_cast<int>((s.end_time - col.lyapunov_t0) / interval);
     if (intervals >= 20) {
       out.lyapunov = lyapunov_from(model, col.lyapunov_start, col.lyapunov_t0, interval,
-                                   intervals, o.lyapunov_d0);
+                                   intervals, o.lyapunov_d0, o.interrupt);
       lyap = out.lyapunov->exponent;
     }
   }
