@@ -662,6 +662,13 @@ TEST(Cli, ARunRemovesOnlyWhatLashWrote) {
   EXPECT_NE(r.out.find("figures: a folder that lash did not write is in the way"), std::string::npos) << r.out;
   EXPECT_EQ(lash::test::read_file((dir / "figures" / "fig1.pdf").string()), "mine");
   fs::remove_all(dir / "figures");
+  // Refused before anything is removed: an earlier run's files stay with the user's folder.
+  ASSERT_EQ(run_lash("run " + example() + " -q -o " + dir.string() + " --set solver.end_time=0.002").code, 0);
+  fs::create_directories(dir / "figures");
+  EXPECT_EQ(run_lash("run " + example() + " -q -o " + dir.string() + " --set solver.end_time=0.002").code, 2);
+  EXPECT_TRUE(fs::exists(dir / "summary.json"));
+  EXPECT_TRUE(fs::exists(dir / "timeseries.csv"));
+  fs::remove_all(dir / "figures");
   // A run with its report: the figures are lash's and the next run replaces them.
   r = run_lash("run " + example() + " -q --report -o " + dir.string() + " --set solver.end_time=0.002");
   ASSERT_EQ(r.code, 0) << r.out;

@@ -51,8 +51,10 @@ TEST(Report, IdealSliderCrankSectionsAndVerdict) {
   EXPECT_EQ(p["distinct"].get<int>(), 1);
   EXPECT_EQ(p["variables"], json({"crank.x", "crank.y"}));  // no clearance joint: body poses
   for (const auto& x : p["points"]) EXPECT_EQ(x.size(), 2u);
-  EXPECT_EQ(r.data["analysis"]["verdict"]["class"], "periodic");
+  // Ten sections are fewer than the rule needs (16): undetermined, with the rule stated.
+  EXPECT_EQ(r.data["analysis"]["verdict"]["class"], "undetermined");
   EXPECT_EQ(r.data["analysis"]["verdict"]["evidence"], json(r.run.verdict.evidence));
+  EXPECT_EQ(r.data["analysis"]["verdict"]["rule"], r.run.verdict.rule);
   // No clearance joint: no twin.
   EXPECT_TRUE(r.data["series"]["ideal"].is_null());
   EXPECT_TRUE(r.data["analysis"]["comparison"].is_null());

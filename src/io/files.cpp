@@ -146,6 +146,39 @@ void RowFile::abandon() {
   fd_ = -1;
 }
 
+long long drop_last_rows(const std::string& path, std::size_t bytes) {
+  const int fd = ::open(path.c_str(), O_RDWR | O_CLOEXEC | O_NOFOLLOW);
+  if (fd < 0) throw IoError(path, "cannot open: " + errno_text(errno));
+  struct stat st {};
+  if (::fstat(fd, &st) != 0) {
+    const int err = errno;
+    ::close(fd);
+    throw IoError(path, "cannot read its size: " + errno_text(err));
+  }
+  // The whole file is read: it is only done after a disk filled up, once.
+  std::string text(static_cast<std::size_t>(st.st_size), '\0');
+  std::size_t got = 0;
+  while (got < text.size()) {
+    const ssize_t n = ::pread(fd, text.data() + got, text.size() - got, static_cast<off_t>(got));
+    if (n <= 0) break;
+    got += static_cast<std::size_t>(n);
+  }
+  text.resize(got);
+  const std::size_t header_end = text.find('\n');
+  std::size_t keep = text.size();
+  long long dropped = 0;
+  while (header_end != std::string::npos && keep > header_end + 1 && text.size() - keep < bytes) {
+    const std::size_t prev = text.rfind('\n', keep - 2);  // the end of the row before the last
+    keep = prev == std::string::npos ? 0 : prev + 1;
+    ++dropped;
+  }
+  const int rc = ::ftruncate(fd, static_cast<off_t>(keep));
+  const int err = rc != 0 ? errno : 0;
+  ::close(fd);
+  if (rc != 0) throw IoError(path, "cannot shorten: " + errno_text(err));
+  return dropped;
+}
+
 FolderLock::FolderLock(const std::string& folder) {
   std::error_code ec;
   std::filesystem::create_directories(folder, ec);
@@ -180,17 +213,25 @@ FolderLock::~FolderLock() {
   if (fd_ >= 0) ::close(fd_);  // releases the lock; the file stays (removing it would race)
 }
 
-void remove_earlier_output(const std::string& path, const std::string& marker) {
+void remove_earlier_output(const std::string& path, const std::string& marker, bool check_only) {
   namespace fs = std::filesystem;
   std::error_code ec;
   const fs::file_status st = fs::symlink_status(path, ec);
   if (ec || st.type() == fs::file_type::not_found) return;
   if (st.type() == fs::file_type::regular || st.type() == fs::file_type::symlink) {
+    if (check_only) return;
     if (!fs::remove(path, ec) && ec) throw IoError(path, "cannot remove the earlier run's file: " + ec.message());
     return;
   }
+  // figures/ from a lash older than the mark is recognised by the figures.log written beside it.
+  const bool legacy_figures =
+      marker == kFiguresMarker &&
+      fs::symlink_status(fs::path(path).parent_path() / "figures.log", ec).type() ==
+          fs::file_type::regular;
   if (st.type() == fs::file_type::directory && !marker.empty() &&
-      fs::symlink_status(path + "/" + marker, ec).type() == fs::file_type::regular) {
+      (legacy_figures ||
+       fs::symlink_status(path + "/" + marker, ec).type() == fs::file_type::regular)) {
+    if (check_only) return;
     fs::remove_all(path, ec);
     if (ec) throw IoError(path, "cannot remove the earlier run's folder: " + ec.message());
     return;

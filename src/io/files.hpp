@@ -61,6 +61,11 @@ class RowFile {
   long long committed_rows_ = 0;  ///< lines in them
 };
 
+/// Removes whole rows from the end of the row file at `path` (never its first row, the header)
+/// until at least `bytes` are freed or only the header is left. Returns the rows removed. For a
+/// full disk: room for the summary that says what the rows are. Throws IoError.
+long long drop_last_rows(const std::string& path, std::size_t bytes);
+
 /// Owns a run folder while a command writes into it: an exclusive lock on FOLDER/.lash.lock
 /// (flock, released when the process ends, however it ends). A second `lash` writing into the
 /// same folder is refused instead of mixing its rows with the first one's.
@@ -79,10 +84,13 @@ class FolderLock {
 
 /// Removes what an earlier run left at `path` before a new one writes there: a file or a symbolic
 /// link (never followed); a folder only when it holds `marker` (a file lash put there to say the
-/// folder is its own, e.g. figures/.lash-figures). Anything else — a user's folder of the same
+/// folder is its own, e.g. figures/.lash-figures; a figures/ folder of an older lash, without the
+/// mark, is recognised by the figures.log beside it). Anything else — a user's folder of the same
 /// name, a device, a FIFO — is left alone and reported with std::invalid_argument, so no run
 /// deletes what it did not write; IoError when removing fails. Nothing there: nothing to do.
-void remove_earlier_output(const std::string& path, const std::string& marker = "");
+/// `check_only`: throw as it would, remove nothing (to check a whole folder before changing it).
+void remove_earlier_output(const std::string& path, const std::string& marker = "",
+                           bool check_only = false);
 
 /// The file that marks a figures/ folder as written by lash.
 constexpr const char* kFiguresMarker = ".lash-figures";

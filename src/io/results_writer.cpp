@@ -16,7 +16,7 @@ const std::vector<std::string>& ResultsWriter::run_files() {
   // summary.json first: from here on, no summary of the earlier run stands beside new rows.
   static const std::vector<std::string> files = {
       "summary.json", "final_state.json", "timeseries.csv", "events.csv", "model_resolved.yaml",
-      "analysis.json", "report_data.json", "report.html", "figures.log", "figures"};
+      "analysis.json", "report_data.json", "report.html", "figures", "figures.log"};
   return files;
 }
 
@@ -28,8 +28,10 @@ ResultsWriter::ResultsWriter(const Model& model, const std::string& folder,
   std::error_code ec;
   std::filesystem::create_directories(folder, ec);
   if (ec) throw IoError(folder, "cannot create the output folder: " + ec.message());
-  for (const auto& f : run_files())
-    remove_earlier_output(folder + "/" + f, f == "figures" ? kFiguresMarker : "");
+  // All or nothing: a folder with something in the way is refused before anything is removed.
+  for (const bool check_only : {true, false})
+    for (const auto& f : run_files())
+      remove_earlier_output(folder + "/" + f, f == "figures" ? kFiguresMarker : "", check_only);
   write_file_atomic(folder + "/model_resolved.yaml", resolved_yaml_ + "\n");
   ts_ = RowFile(folder + "/timeseries.csv");
   ev_ = RowFile(folder + "/events.csv");
@@ -191,8 +193,20 @@ RunStatus ResultsWriter::finish(const RunResult& r) {
                  {"baumgarte_alpha", s.baumgarte_alpha},
                  {"baumgarte_beta", s.baumgarte_beta}};
   for (const auto& [key, value] : extra_.items()) j[key] = value;
-  write_file_atomic(folder_ + "/summary.json",
-                    j.dump(2, ' ', false, json::error_handler_t::replace) + "\n");
+  auto text = [&] { return j.dump(2, ' ', false, json::error_handler_t::replace) + "\n"; };
+  try {
+    write_file_atomic(folder_ + "/summary.json", text());
+  } catch (const IoError&) {
+    if (write_error_.empty()) throw;
+    // The disk is full of rows: give up the last of them so the summary saying what the others
+    // are fits (twice its size, for the temporary copy and the file system's blocks).
+    const long long dropped = drop_last_rows(folder_ + "/timeseries.csv", 2 * text().size() + 8192);
+    j["integrator"]["outputs"] = std::max(0LL, ts_.rows_written() - 1 - dropped);
+    j["status"]["message"] = status.message + "; the last " + std::to_string(dropped) +
+                             " rows of timeseries.csv were removed to make room for this summary";
+    status.message = j["status"]["message"].get<std::string>();
+    write_file_atomic(folder_ + "/summary.json", text());
+  }
   return status;
 }
 
