@@ -101,13 +101,13 @@ int exit_code(lash::RunOutcome o) {
   return kExitNumerical;
 }
 
-/// A run folder about to be read by `report` or `analyze`: it must hold model_resolved.yaml, and
-/// when the run's summary.json is there, the model in it must be the one in model_resolved.yaml
+/// A run folder about to be read by `report` or `analyze` (its model_resolved.yaml checked to exist
+/// before the folder is locked): when the run's summary.json is there, the model in it must be
+/// the one in model_resolved.yaml
 /// (an edited model would give a report of a run that never happened). Returns "" or the problem.
 std::string check_run_folder(const std::string& dir) {
   namespace fs = std::filesystem;
   const std::string model = dir + "/model_resolved.yaml", summary = dir + "/summary.json";
-  if (!fs::exists(model)) return model + ": missing: not a folder written by `lash run`";
   if (!fs::exists(summary)) return "";  // a run killed before its end: the model alone is enough
   nlohmann::json j;
   std::string model_text;
