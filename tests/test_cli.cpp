@@ -698,7 +698,8 @@ TEST(Cli, SignalsAfterTheRunAndIgnoredSignals) {
                           example() + " -q --report -o " + dir.string() + " --set solver.end_time=0.3");
   EXPECT_EQ(r.code, 130) << r.out;
   EXPECT_EQ(read_summary(dir)["status"]["outcome"], "interrupted");
-  EXPECT_FALSE(fs::exists(dir / "report.html"));
+  for (const char* f : {"report.html", "report_data.json", "figures", "figures.log"})
+    EXPECT_FALSE(fs::exists(dir / f)) << f;
   expect_whole_rows(dir / "timeseries.csv");
   // A SIGHUP the parent ignores (nohup) stays ignored: the run completes.
   r = run_lash_raw("sh -c \"trap '' HUP; exec " + std::string(LASH_BINARY) + " run " + example() +

@@ -454,6 +454,10 @@ int main(int argc, char** argv) {
       (outcome == lash::RunOutcome::completed || outcome == lash::RunOutcome::failed)) {
     try {
       report_notes = lash::write_report(lash::report_data(model, ra), out_dir);
+      if (g_interrupt.load() != 0) {  // during the figures: no half report beside the results
+        lash::remove_report(out_dir);
+        report_notes.clear();
+      }
     } catch (const std::exception& e) {
       report_notes.push_back(std::string("not written: ") + e.what());
       report_failed = true;

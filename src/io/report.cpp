@@ -280,4 +280,10 @@ std::vector<std::string> write_report(const json& data, const std::string& folde
   return notes;
 }
 
+void remove_report(const std::string& folder) {
+  remove_earlier_output(folder + "/figures", kFiguresMarker);
+  for (const char* f : {"report.html", "report_data.json", "figures.log"})
+    remove_earlier_output(folder + "/" + f);
+}
+
 }  // namespace lash

@@ -25,4 +25,9 @@ nlohmann::json report_data(const Model& model, const RunAnalysis& analysis);
 /// what was written or why a part was skipped; throws IoError when a file cannot be written.
 std::vector<std::string> write_report(const nlohmann::json& data, const std::string& folder);
 
+/// Removes what write_report wrote into `folder` (report_data.json, report.html, figures.log and
+/// a figures/ folder carrying lash's mark): a report cut short by a signal is not left beside the
+/// results it would misdescribe.
+void remove_report(const std::string& folder);
+
 }  // namespace lash
