@@ -13,6 +13,7 @@
 #include <iostream>
 #include <memory>
 
+#include "cli/sweep.hpp"
 #include "cli/tune_absorber.hpp"
 #include "io/files.hpp"
 #include "io/model_loader.hpp"
@@ -174,7 +175,7 @@ int main(int argc, char** argv) {
   auto* report = app.add_subcommand(
       "report", "Analyse an earlier run folder (re-running its model_resolved.yaml) and write "
                 "report.html, report_data.json and figures/ into it");
-  report->add_option("folder", run_dir, "A folder written by `lash run`")
+  report->add_option("folder", run_dir, "A folder written by `lash run` (or by `lash sweep`: its study_report.html)")
       ->required()
       ->check(CLI::ExistingDirectory);
 
@@ -221,6 +222,7 @@ int main(int argc, char** argv) {
       ->take_all();
 
   const lash::cli::TuneAbsorberCommand tune_absorber(app);
+  const lash::cli::SweepCommand sweep(app);
 
   try {
     app.parse(argc, argv);
@@ -231,6 +233,22 @@ int main(int argc, char** argv) {
   // instead of the process being killed with a half-written row.
   ::signal(SIGXFSZ, SIG_IGN);
   if (tune_absorber.parsed()) return tune_absorber.run(std::cout, std::cerr);
+  if (sweep.parsed()) return sweep.run(g_interrupt, install_signal_handlers);
+
+  // A study folder (lash sweep): its report is study_report.html from study.db.
+  if (*report && std::filesystem::exists(run_dir + "/study.db")) {
+    try {
+      const lash::FolderLock lock(run_dir);
+      std::cout << "wrote " << lash::cli::write_study_report(run_dir) << "\n";
+      return kExitOk;
+    } catch (const lash::IoError& e) {
+      std::cerr << "error: " << e.what() << "\n";
+      return kExitIo;
+    } catch (const std::exception& e) {
+      std::cerr << "error: " << e.what() << "\n";
+      return kExitBadInput;
+    }
+  }
 
   std::unique_ptr<lash::FolderLock> folder_lock;  // report/analyze: no run writes meanwhile
   if (*report || *analyze) {

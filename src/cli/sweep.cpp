@@ -1,0 +1,331 @@
+// `lash sweep` (sweep.hpp): local threads or MPI ranks over a study's runs, one database.
+#include "cli/sweep.hpp"
+
+#include <fmt/core.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <condition_variable>
+#include <cstdlib>
+#include <deque>
+#include <filesystem>
+#include <iostream>
+#include <mutex>
+#include <thread>
+
+#include "io/diagnostics.hpp"
+#include "io/files.hpp"
+#include "study/study_db.hpp"
+#include "study/sweep.hpp"
+
+#ifdef LASH_MPI
+#include <mpi.h>
+#endif
+
+namespace lash::cli {
+namespace {
+
+constexpr int kExitOk = 0, kExitBadInput = 2, kExitIo = 3, kExitInterrupted = 130;
+
+std::string duration_text(double s) {
+  if (s < 90) return fmt::format("{:.0f} s", s);
+  if (s < 5400) return fmt::format("{:.0f} min {:.0f} s", std::floor(s / 60), std::fmod(s, 60));
+  return fmt::format("{:.0f} h {:.0f} min", std::floor(s / 3600), std::fmod(s, 3600) / 60);
+}
+
+/// The progress line: done / failed / remaining and an estimated finish.
+class Progress {
+ public:
+  Progress(int total, int already, bool show)
+      : total_(total), done_(already), show_(show), tty_(isatty(STDERR_FILENO)) {}
+  void add(const RunRecord& r) {
+    ++done_;
+    ++this_session_;
+    if (r.status != "completed") ++failed_;
+    if (done_ < total_) print(false);  // the last line is print(true)'s
+  }
+  void print(bool last) {
+    if (!show_) return;
+    const auto now = std::chrono::steady_clock::now();
+    const double elapsed = std::chrono::duration<double>(now - start_).count();
+    // Without a terminal: a line per 10 % or per 30 s, not one per run.
+    if (!tty_ && !last && done_ < total_ && done_ < next_mark_ &&
+        now - last_ < std::chrono::seconds(30))
+      return;
+    last_ = now;
+    next_mark_ = done_ + std::max(1, total_ / 10);
+    const int left = total_ - done_;
+    std::string eta = "";
+    if (this_session_ > 0 && left > 0)
+      eta = ", about " + duration_text(elapsed / this_session_ * left) + " left";
+    fmt::print(stderr, "{}sweep: {}/{} done ({} failed), {} to go{}{}", tty_ ? "\r" : "", done_,
+               total_, failed_, left, eta, tty_ && !last ? "    " : "\n");
+  }
+  int failed() const { return failed_; }
+
+ private:
+  int total_, done_, failed_ = 0, this_session_ = 0, next_mark_ = 0;
+  bool show_, tty_;
+  std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now(), last_{};
+};
+
+/// Prints a model error of the study (every diagnostic) and returns exit 2.
+int study_error(const ModelError& e) {
+  for (const auto& d : e.diagnostics()) std::cerr << d.str() << "\n";
+  std::cerr << e.diagnostics().size() << " problem" << (e.diagnostics().size() == 1 ? "" : "s")
+            << " found; nothing was run.\n";
+  return kExitBadInput;
+}
+
+/// The folder, its lock and its database, checked before any run starts.
+struct StudyFolder {
+  std::unique_ptr<FolderLock> lock;
+  std::unique_ptr<StudyDb> db;
+  std::vector<StudyRun> todo;
+  int already = 0;
+};
+
+int open_folder(const StudySpec& spec, const std::vector<StudyRun>& runs, const std::string& out,
+                bool resume, StudyFolder& f) {
+  try {
+    f.lock = std::make_unique<FolderLock>(out);
+    const std::string db = out + "/study.db";
+    if (std::filesystem::exists(db) && !resume) {
+      std::cerr << "error: " << db
+                << ": this folder holds a study already: add --resume to finish it (runs it holds "
+                   "are kept and not run again), or choose another output folder\n";
+      return kExitBadInput;
+    }
+    f.db = std::make_unique<StudyDb>(db, spec, static_cast<int>(runs.size()));
+    const auto finished = f.db->finished();
+    for (const auto& r : runs)
+      if (!finished.count(r.index)) f.todo.push_back(r);
+    f.already = static_cast<int>(runs.size() - f.todo.size());
+  } catch (const IoError& e) {
+    std::cerr << "error: " << e.what() << "\n";
+    return kExitIo;
+  } catch (const std::exception& e) {
+    std::cerr << "error: " << e.what() << "\n";
+    return kExitBadInput;
+  }
+  return -1;
+}
+
+/// The end of a sweep: CSV exports, a closing line, the exit code.
+int finish(StudyFolder& f, const std::string& out, int total, const Progress& progress,
+           int interrupted_by, const std::string& write_error, bool quiet) {
+  try {
+    f.db->export_csv(out);
+  } catch (const std::exception& e) {
+    std::cerr << "error: " << e.what() << "\n";
+    return kExitIo;
+  }
+  const int recorded = static_cast<int>(f.db->finished().size());
+  if (!write_error.empty()) {
+    std::cerr << "\nerror: " << write_error << "\n" << recorded << " of " << total
+              << " runs are recorded in " << out << "/study.db; `--resume` runs the rest\n";
+    return kExitIo;
+  }
+  if (interrupted_by != 0) {
+    std::cerr << "\ninterrupted by signal " << interrupted_by << ": " << recorded << " of " << total
+              << " runs are recorded in " << out << "/study.db; `--resume` runs the rest\n";
+    return kExitInterrupted;
+  }
+  if (!quiet)
+    fmt::print("study: {} runs in {}/study.db ({} failed); runs.csv and sections.csv beside it\n",
+               recorded, out, progress.failed());
+  return kExitOk;
+}
+
+bool under_mpi_launcher() {
+  for (const char* v : {"OMPI_COMM_WORLD_SIZE", "PMIX_RANK", "PMI_RANK", "PMI_SIZE"})
+    if (std::getenv(v)) return true;
+  return false;
+}
+
+#ifdef LASH_MPI
+constexpr int kTagWork = 1, kTagResult = 2;
+
+void send_text(const std::string& s, int to, int tag) {
+  MPI_Send(s.data(), static_cast<int>(s.size()), MPI_CHAR, to, tag, MPI_COMM_WORLD);
+}
+
+void broadcast_text(std::string& s) {
+  long n = static_cast<long>(s.size());
+  MPI_Bcast(&n, 1, MPI_LONG, 0, MPI_COMM_WORLD);
+  s.resize(n);
+  if (n > 0) MPI_Bcast(s.data(), static_cast<int>(n), MPI_CHAR, 0, MPI_COMM_WORLD);
+}
+
+/// Rank > 0: runs what rank 0 hands out until told to stop.
+int mpi_worker(std::atomic<int>& interrupt) {
+  std::string bundle;
+  broadcast_text(bundle);
+  if (bundle.empty()) return kExitOk;  // rank 0 refused the study; it says why
+  const auto j = nlohmann::json::parse(bundle);
+  std::map<std::string, std::string> models = j.at("models");
+  const StudySpec spec = load_study_text(j.at("text"), j.at("file"),
+                                         [&](const std::string& p) { return models.at(p); });
+  const auto runs = study_runs(spec);
+  send_text("", 0, kTagResult);  // ready
+  for (;;) {
+    int index = -1;
+    MPI_Recv(&index, 1, MPI_INT, 0, kTagWork, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+    if (index < 0) break;
+    const RunRecord rec = run_study_point(spec, runs.at(index), &interrupt);
+    send_text(to_json(rec).dump(), 0, kTagResult);
+  }
+  return kExitOk;
+}
+#endif
+
+}  // namespace
+
+SweepCommand::SweepCommand(CLI::App& app) {
+  sub_ = app.add_subcommand(
+      "sweep", "Run every case of a study file (docs/studies.md) on all cores, or on the processes "
+               "of an MPI job; results in OUTPUT/study.db (SQLite), runs.csv and sections.csv");
+  sub_->add_option("study", study_, "Study file (YAML)")->required();
+  sub_->add_option("-o,--output", out_, "Output folder (default: out/<study file name>)");
+  sub_->add_option("-j,--jobs", jobs_, "Runs at once on this machine (default: every core)")
+      ->check(CLI::Range(1, 4096));
+  sub_->add_flag("--resume", resume_,
+                 "Finish a study in OUTPUT: only the runs its database does not hold are run");
+  sub_->add_flag("-q,--quiet", quiet_, "No progress line and no closing summary");
+}
+
+int SweepCommand::run(std::atomic<int>& interrupt, const std::function<void()>& install_handlers) const {
+  const std::string out =
+      out_.empty() ? "out/" + std::filesystem::path(study_).stem().string() : out_;
+  int rank = 0, size = 1;
+  if (under_mpi_launcher()) {
+#ifdef LASH_MPI
+    MPI_Init(nullptr, nullptr);
+    MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+    MPI_Comm_size(MPI_COMM_WORLD, &size);
+#else
+    if (const char* n = std::getenv("OMPI_COMM_WORLD_SIZE"); n && std::atoi(n) > 1) {
+      std::cerr << "error: this lash was built without MPI (libopenmpi-dev was not found at "
+                   "build time); run `lash sweep` without mpirun, or rebuild with it\n";
+      return kExitBadInput;
+    }
+#endif
+  }
+  install_handlers();
+#ifdef LASH_MPI
+  struct Finalize {
+    bool on;
+    ~Finalize() {
+      if (on) MPI_Finalize();
+    }
+  } finalize{under_mpi_launcher()};
+  if (rank > 0) return mpi_worker(interrupt);
+#endif
+  std::string bundle;
+  StudySpec spec;
+  std::vector<StudyRun> runs;
+  StudyFolder folder;
+  int code = -1;
+  try {
+    spec = load_study_file(study_);
+    runs = study_runs(spec);
+  } catch (const ModelError& e) {
+    code = study_error(e);
+  }
+  if (code < 0) code = open_folder(spec, runs, out, resume_, folder);
+  if (code < 0) {
+    nlohmann::json models = nlohmann::json::object();
+    for (const auto& [p, t] : spec.model_texts) models[p] = t;
+    bundle = nlohmann::json{{"file", spec.file}, {"text", spec.text}, {"models", models}}.dump();
+  }
+#ifdef LASH_MPI
+  if (size > 1) broadcast_text(bundle);  // empty: the workers stop
+#endif
+  if (code >= 0) return code;
+
+  const int total = static_cast<int>(runs.size());
+  Progress progress(total, folder.already, !quiet_);
+  if (!quiet_ && folder.already > 0)
+    fmt::print(stderr, "sweep: {} of {} runs already in {}/study.db; running the other {}\n",
+               folder.already, total, out, folder.todo.size());
+  std::string write_error;
+  auto record = [&](const RunRecord& rec, const std::string& worker) {
+    if (rec.status == "interrupted" || !write_error.empty()) return;  // rerun by --resume
+    try {
+      folder.db->add(runs.at(rec.index), rec, worker);
+      progress.add(rec);
+    } catch (const std::exception& e) {
+      write_error = e.what();
+    }
+  };
+
+#ifdef LASH_MPI
+  if (size > 1) {
+    // Rank 0 hands out one run at a time to whichever rank asks (runs differ a lot in cost) and
+    // keeps the database; the ranks need no shared file system.
+    size_t next = 0;
+    int active = size - 1;
+    while (active > 0) {
+      MPI_Status st;
+      MPI_Probe(MPI_ANY_SOURCE, kTagResult, MPI_COMM_WORLD, &st);
+      int n = 0;
+      MPI_Get_count(&st, MPI_CHAR, &n);
+      std::string msg(n, '\0');
+      MPI_Recv(msg.data(), n, MPI_CHAR, st.MPI_SOURCE, kTagResult, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+      if (!msg.empty()) record(record_from_json(nlohmann::json::parse(msg)), "rank " + std::to_string(st.MPI_SOURCE));
+      int index = -1;
+      if (next < folder.todo.size() && interrupt.load() == 0 && write_error.empty())
+        index = folder.todo[next++].index;
+      MPI_Send(&index, 1, MPI_INT, st.MPI_SOURCE, kTagWork, MPI_COMM_WORLD);
+      if (index < 0) --active;
+    }
+    progress.print(true);
+    return finish(folder, out, total, progress, interrupt.load(), write_error, quiet_);
+  }
+#endif
+
+  // Threads: one study, one model text, one workspace per run; the database is written here.
+  const int jobs = std::max(1, std::min<int>(jobs_ > 0 ? jobs_ : static_cast<int>(std::thread::hardware_concurrency()),
+                                             static_cast<int>(folder.todo.size())));
+  std::mutex mu;
+  std::condition_variable cv;
+  std::deque<std::pair<RunRecord, int>> results;
+  std::atomic<size_t> next{0};
+  std::atomic<bool> stop{false};
+  std::vector<std::thread> workers;
+  for (int w = 0; w < jobs; ++w)
+    workers.emplace_back([&, w] {
+      for (;;) {
+        const size_t i = next++;
+        if (i >= folder.todo.size() || stop.load() || interrupt.load() != 0) break;
+        RunRecord rec = run_study_point(spec, folder.todo[i], &interrupt);
+        std::lock_guard<std::mutex> g(mu);
+        results.emplace_back(std::move(rec), w);
+        cv.notify_one();
+      }
+      std::lock_guard<std::mutex> g(mu);
+      RunRecord done;
+      done.index = -1;  // this worker is done
+      results.emplace_back(std::move(done), w);
+      cv.notify_one();
+    });
+  int running = jobs;
+  while (running > 0) {
+    std::unique_lock<std::mutex> lk(mu);
+    cv.wait_for(lk, std::chrono::seconds(1), [&] { return !results.empty(); });
+    while (!results.empty()) {
+      auto [rec, w] = std::move(results.front());
+      results.pop_front();
+      lk.unlock();
+      if (rec.index < 0) --running;
+      else record(rec, "thread " + std::to_string(w));
+      if (!write_error.empty()) stop.store(true);
+      lk.lock();
+    }
+  }
+  for (auto& t : workers) t.join();
+  progress.print(true);
+  return finish(folder, out, total, progress, interrupt.load(), write_error, quiet_);
+}
+
+}  // namespace lash::cli

@@ -1,0 +1,38 @@
+#pragma once
+/// @file sweep.hpp
+/// `lash sweep STUDY -o DIR`: every run of a study file on all local cores (threads), or on the
+/// processes of an MPI job (rank 0 hands out runs and writes the database, the others run them),
+/// results in DIR/study.db with runs.csv and sections.csv beside it; `--resume` runs only what
+/// the database does not hold yet. `lash report DIR` of such a folder: study_report.html.
+#include <CLI/CLI.hpp>
+#include <atomic>
+#include <functional>
+#include <string>
+
+namespace lash::cli {
+
+class SweepCommand {
+ public:
+  explicit SweepCommand(CLI::App& app);
+  SweepCommand(const SweepCommand&) = delete;
+  SweepCommand& operator=(const SweepCommand&) = delete;
+  bool parsed() const { return sub_->parsed(); }
+  /// Runs the study. `interrupt` holds a signal number once one arrived (handlers installed by
+  /// `install_handlers`, called once the study is checked). Returns the exit code.
+  int run(std::atomic<int>& interrupt, const std::function<void()>& install_handlers) const;
+
+ private:
+  CLI::App* sub_;
+  std::string study_;
+  std::string out_;
+  int jobs_ = 0;
+  bool resume_ = false;
+  bool quiet_ = false;
+};
+
+/// Writes `folder`/study_report.html from `folder`/study.db: the bifurcation diagram of each kept
+/// section channel over the first numeric parameter, metric-versus-parameter plots, the failed
+/// runs with their errors. Returns the path written.
+std::string write_study_report(const std::string& folder);
+
+}  // namespace lash::cli

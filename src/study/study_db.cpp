@@ -1,0 +1,338 @@
+// A study's results in SQLite (study_db.hpp).
+#include "study/study_db.hpp"
+
+#include <sqlite3.h>
+
+#include <chrono>
+#include <cmath>
+#include <ctime>
+#include <map>
+#include <sstream>
+
+#include "io/files.hpp"
+
+namespace lash {
+namespace {
+
+constexpr int kSchemaVersion = 1;
+
+std::string quoted(const std::string& name) {  // an SQL identifier
+  std::string q = "\"";
+  for (char c : name) q += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return q + "\"";
+}
+
+/// A prepared statement, finalised on scope exit.
+class Stmt {
+ public:
+  Stmt(sqlite3* db, const std::string& sql, const std::string& path) : path_(path) {
+    if (sqlite3_prepare_v2(db, sql.c_str(), -1, &s_, nullptr) != SQLITE_OK)
+      throw IoError(path, std::string("database: ") + sqlite3_errmsg(db));
+  }
+  ~Stmt() { sqlite3_finalize(s_); }
+  Stmt& bind(int i, const std::string& v) {
+    sqlite3_bind_text(s_, i, v.c_str(), -1, SQLITE_TRANSIENT);
+    return *this;
+  }
+  Stmt& bind(int i, double v) {
+    if (std::isfinite(v)) sqlite3_bind_double(s_, i, v);
+    else sqlite3_bind_null(s_, i);
+    return *this;
+  }
+  Stmt& bind(int i, long v) {
+    sqlite3_bind_int64(s_, i, v);
+    return *this;
+  }
+  /// A parameter: its number where it is one, else its text.
+  Stmt& bind_value(int i, const std::string& text, double number) {
+    return std::isnan(number) ? bind(i, text) : bind(i, number);
+  }
+  bool step() {
+    const int rc = sqlite3_step(s_);
+    if (rc == SQLITE_ROW) return true;
+    if (rc == SQLITE_DONE) return false;
+    throw IoError(path_, std::string("database: ") + sqlite3_errmsg(sqlite3_db_handle(s_)));
+  }
+  void run() {
+    step();
+    sqlite3_reset(s_);
+    sqlite3_clear_bindings(s_);
+  }
+  std::string text(int i) const {
+    const auto* p = sqlite3_column_text(s_, i);
+    return p ? reinterpret_cast<const char*>(p) : "";
+  }
+  double number(int i) const {
+    return sqlite3_column_type(s_, i) == SQLITE_NULL ? std::nan("") : sqlite3_column_double(s_, i);
+  }
+  bool is_text(int i) const { return sqlite3_column_type(s_, i) == SQLITE_TEXT; }
+
+ private:
+  sqlite3_stmt* s_ = nullptr;
+  std::string path_;
+};
+
+std::string csv_field(const std::string& s) {
+  if (s.find_first_of(",\"\n\r") == std::string::npos) return s;
+  std::string q = "\"";
+  for (char c : s) q += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return q + "\"";
+}
+
+std::string csv_number(double v) {
+  if (!std::isfinite(v)) return "";
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  return buf;
+}
+
+std::string now_utc() {
+  const std::time_t t = std::time(nullptr);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&t));
+  return buf;
+}
+
+std::string model_texts_json(const StudySpec& spec) {
+  nlohmann::json j = nlohmann::json::object();
+  for (const auto& [path, text] : spec.model_texts) j[path] = text;
+  return j.dump();
+}
+
+}  // namespace
+
+StudyDb::StudyDb(const std::string& path, const StudySpec& spec, int total_runs) : path_(path) {
+  for (const auto& p : spec.parameters) parameters_.push_back(p.name);
+  if (sqlite3_open_v2(path.c_str(), &db_, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE, nullptr) != SQLITE_OK) {
+    const std::string msg = db_ ? sqlite3_errmsg(db_) : "out of memory";
+    sqlite3_close(db_);
+    db_ = nullptr;
+    throw IoError(path, "cannot open the study database: " + msg);
+  }
+  sqlite3_busy_timeout(db_, 10000);
+  try {
+    exec("PRAGMA synchronous=FULL");
+    bool fresh = true;
+    {
+      Stmt s(db_, "SELECT count(*) FROM sqlite_master WHERE type='table' AND name='study'", path_);
+      s.step();
+      fresh = s.number(0) == 0;
+    }
+    if (fresh) {
+      std::string runs = "CREATE TABLE runs(run INTEGER PRIMARY KEY";
+      for (const auto& p : parameters_) runs += ", " + quoted(p);
+      runs += ", status TEXT NOT NULL, message TEXT, verdict TEXT, t_reached REAL, "
+              "wall_seconds REAL, steps INTEGER, rhs_evaluations INTEGER, events INTEGER, "
+              "worker TEXT, finished TEXT)";
+      exec("BEGIN IMMEDIATE");
+      exec("CREATE TABLE study(key TEXT PRIMARY KEY, value TEXT)");
+      exec("CREATE TABLE parameters(position INTEGER PRIMARY KEY, name TEXT NOT NULL)");
+      exec(runs);
+      exec("CREATE TABLE metrics(run INTEGER NOT NULL, name TEXT NOT NULL, value REAL, "
+           "PRIMARY KEY(run, name))");
+      exec("CREATE TABLE sections(run INTEGER NOT NULL, k INTEGER NOT NULL, t REAL NOT NULL, "
+           "channel TEXT NOT NULL, value REAL)");
+      exec("CREATE INDEX sections_run ON sections(run)");
+      exec("CREATE TABLE series(run INTEGER NOT NULL, channel TEXT NOT NULL, time TEXT NOT NULL, "
+           "value TEXT NOT NULL)");
+      Stmt st(db_, "INSERT INTO study(key, value) VALUES(?, ?)", path_);
+      const std::map<std::string, std::string> info = {
+          {"schema_version", std::to_string(kSchemaVersion)},
+          {"name", spec.name},
+          {"study_file", spec.file},
+          {"study_text", spec.text},
+          {"model_texts", model_texts_json(spec)},
+          {"runs", std::to_string(total_runs)},
+          {"created", now_utc()}};
+      for (const auto& [k, v] : info) st.bind(1, k).bind(2, v).run();
+      Stmt sp(db_, "INSERT INTO parameters(position, name) VALUES(?, ?)", path_);
+      for (size_t i = 0; i < parameters_.size(); ++i)
+        sp.bind(1, static_cast<long>(i)).bind(2, parameters_[i]).run();
+      exec("COMMIT");
+    } else {
+      std::map<std::string, std::string> info;
+      Stmt s(db_, "SELECT key, value FROM study", path_);
+      while (s.step()) info[s.text(0)] = s.text(1);
+      if (info["schema_version"] != std::to_string(kSchemaVersion))
+        throw std::invalid_argument(path + ": a study database of another lash version (schema " +
+                                    info["schema_version"] + ")");
+      if (info["study_text"] != spec.text)
+        throw std::invalid_argument(path + ": holds the results of another study file (" +
+                                    info["study_file"] +
+                                    " as it was then); resuming would mix two studies: choose "
+                                    "another output folder");
+      if (info["model_texts"] != model_texts_json(spec))
+        throw std::invalid_argument(path + ": the model file(s) changed since this study began; "
+                                    "resuming would mix two models: choose another output folder");
+    }
+  } catch (...) {
+    sqlite3_close(db_);
+    db_ = nullptr;
+    throw;
+  }
+}
+
+StudyDb::~StudyDb() { sqlite3_close(db_); }
+
+void StudyDb::exec(const std::string& sql) const {
+  char* err = nullptr;
+  if (sqlite3_exec(db_, sql.c_str(), nullptr, nullptr, &err) != SQLITE_OK) {
+    const std::string msg = err ? err : "unknown error";
+    sqlite3_free(err);
+    throw IoError(path_, "database: " + msg);
+  }
+}
+
+std::set<int> StudyDb::finished() const {
+  std::set<int> out;
+  Stmt s(db_, "SELECT run FROM runs", path_);
+  while (s.step()) out.insert(static_cast<int>(s.number(0)));
+  return out;
+}
+
+void StudyDb::add(const StudyRun& run, const RunRecord& r, const std::string& worker) {
+  exec("BEGIN IMMEDIATE");
+  try {
+    std::string sql = "INSERT INTO runs(run";
+    for (const auto& p : parameters_) sql += ", " + quoted(p);
+    sql += ", status, message, verdict, t_reached, wall_seconds, steps, rhs_evaluations, events, "
+           "worker, finished) VALUES(?";
+    for (size_t i = 0; i < parameters_.size() + 10; ++i) sql += ", ?";
+    sql += ")";
+    Stmt s(db_, sql, path_);
+    int i = 1;
+    s.bind(i++, static_cast<long>(r.index));
+    for (size_t p = 0; p < parameters_.size(); ++p) s.bind_value(i++, run.values[p], run.numbers[p]);
+    s.bind(i, r.status).bind(i + 1, r.message).bind(i + 2, r.verdict).bind(i + 3, r.t_reached);
+    s.bind(i + 4, r.wall_seconds).bind(i + 5, r.steps).bind(i + 6, r.rhs_evaluations);
+    s.bind(i + 7, r.events).bind(i + 8, worker).bind(i + 9, now_utc());
+    s.run();
+    Stmt m(db_, "INSERT INTO metrics(run, name, value) VALUES(?, ?, ?)", path_);
+    for (const auto& [name, v] : r.metrics) m.bind(1, static_cast<long>(r.index)).bind(2, name).bind(3, v).run();
+    Stmt sec(db_, "INSERT INTO sections(run, k, t, channel, value) VALUES(?, ?, ?, ?, ?)", path_);
+    for (size_t k = 0; k < r.section_times.size(); ++k)
+      for (size_t c = 0; c < r.section_channels.size(); ++c)
+        sec.bind(1, static_cast<long>(r.index)).bind(2, static_cast<long>(k)).bind(3, r.section_times[k])
+            .bind(4, r.section_channels[c]).bind(5, r.section_values[k][c]).run();
+    Stmt ser(db_, "INSERT INTO series(run, channel, time, value) VALUES(?, ?, ?, ?)", path_);
+    const std::string times = nlohmann::json(r.series_time).dump();
+    for (size_t c = 0; c < r.series_channels.size(); ++c)
+      ser.bind(1, static_cast<long>(r.index)).bind(2, r.series_channels[c]).bind(3, times)
+          .bind(4, nlohmann::json(r.series_values[c]).dump()).run();
+    exec("COMMIT");
+  } catch (...) {
+    sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr);
+    throw;
+  }
+}
+
+void StudyDb::export_csv(const std::string& folder) const {
+  const StudyTable t = read_study(path_);
+  std::vector<std::string> metric_names;
+  for (const auto& row : t.rows)
+    for (const auto& [name, v] : row.metrics)
+      if (std::find(metric_names.begin(), metric_names.end(), name) == metric_names.end())
+        metric_names.push_back(name);
+  std::ostringstream out;
+  out << "run";
+  for (const auto& p : t.parameters) out << "," << csv_field(p);
+  out << ",status,verdict,wall_seconds";
+  for (const auto& m : metric_names) out << "," << csv_field(m);
+  out << ",message\n";
+  for (const auto& row : t.rows) {
+    out << row.run;
+    for (size_t p = 0; p < t.parameters.size(); ++p)
+      out << "," << (std::isnan(row.numbers[p]) ? csv_field(row.values[p]) : csv_number(row.numbers[p]));
+    out << "," << row.status << "," << row.verdict << "," << csv_number(row.wall_seconds);
+    for (const auto& m : metric_names) {
+      out << ",";
+      for (const auto& [name, v] : row.metrics)
+        if (name == m) out << csv_number(v);
+    }
+    out << "," << csv_field(row.message) << "\n";
+  }
+  write_file_atomic(folder + "/runs.csv", out.str());
+
+  std::ostringstream sec;
+  sec << "run";
+  for (const auto& p : t.parameters) sec << "," << csv_field(p);
+  sec << ",k,t,channel,value\n";
+  std::map<int, const StudyTable::Row*> by_run;
+  for (const auto& row : t.rows) by_run[row.run] = &row;
+  Stmt s(db_, "SELECT run, k, t, channel, value FROM sections ORDER BY run, k, channel", path_);
+  while (s.step()) {
+    const int run = static_cast<int>(s.number(0));
+    sec << run;
+    const auto* row = by_run.at(run);
+    for (size_t p = 0; p < t.parameters.size(); ++p)
+      sec << "," << (std::isnan(row->numbers[p]) ? csv_field(row->values[p]) : csv_number(row->numbers[p]));
+    sec << "," << static_cast<long>(s.number(1)) << "," << csv_number(s.number(2)) << ","
+        << csv_field(s.text(3)) << "," << csv_number(s.number(4)) << "\n";
+  }
+  write_file_atomic(folder + "/sections.csv", sec.str());
+}
+
+StudyTable read_study(const std::string& path) {
+  sqlite3* db = nullptr;
+  if (sqlite3_open_v2(path.c_str(), &db, SQLITE_OPEN_READONLY, nullptr) != SQLITE_OK) {
+    const std::string msg = db ? sqlite3_errmsg(db) : "out of memory";
+    sqlite3_close(db);
+    throw IoError(path, "cannot open the study database: " + msg);
+  }
+  sqlite3_busy_timeout(db, 10000);
+  StudyTable t;
+  try {
+    {
+      Stmt s(db, "SELECT key, value FROM study WHERE key IN ('name', 'runs')", path);
+      while (s.step()) {
+        if (s.text(0) == "name") t.name = s.text(1);
+        else t.total_runs = std::atoi(s.text(1).c_str());
+      }
+    }
+    {
+      Stmt s(db, "SELECT name FROM parameters ORDER BY position", path);
+      while (s.step()) t.parameters.push_back(s.text(0));
+    }
+    std::string sql = "SELECT run";
+    for (const auto& p : t.parameters) sql += ", " + quoted(p);
+    sql += ", status, message, verdict, wall_seconds FROM runs ORDER BY run";
+    Stmt s(db, sql, path);
+    std::map<int, size_t> at;
+    while (s.step()) {
+      StudyTable::Row row;
+      row.run = static_cast<int>(s.number(0));
+      int i = 1;
+      for (size_t p = 0; p < t.parameters.size(); ++p, ++i) {
+        row.values.push_back(s.text(i));
+        row.numbers.push_back(s.is_text(i) ? std::nan("") : s.number(i));
+        if (!s.is_text(i)) row.values.back() = csv_number(row.numbers.back());
+      }
+      row.status = s.text(i++);
+      row.message = s.text(i++);
+      row.verdict = s.text(i++);
+      row.wall_seconds = s.number(i++);
+      at[row.run] = t.rows.size();
+      t.rows.push_back(std::move(row));
+    }
+    Stmt m(db, "SELECT run, name, value FROM metrics ORDER BY run, rowid", path);
+    while (m.step()) {
+      const auto it = at.find(static_cast<int>(m.number(0)));
+      if (it != at.end()) t.rows[it->second].metrics.push_back({m.text(1), m.number(2)});
+    }
+    Stmt c(db, "SELECT DISTINCT channel FROM sections ORDER BY channel", path);
+    while (c.step()) t.section_channels.push_back(c.text(0));
+    t.points.resize(t.section_channels.size());
+    Stmt p(db, "SELECT run, channel, value FROM sections ORDER BY run, k", path);
+    while (p.step()) {
+      const auto ch = std::find(t.section_channels.begin(), t.section_channels.end(), p.text(1));
+      t.points[ch - t.section_channels.begin()].push_back({static_cast<int>(p.number(0)), p.number(2)});
+    }
+  } catch (...) {
+    sqlite3_close(db);
+    throw;
+  }
+  sqlite3_close(db);
+  return t;
+}
+
+}  // namespace lash

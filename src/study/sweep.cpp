@@ -1,0 +1,621 @@
+// Study files, their runs and one run's record (sweep.hpp; format: docs/studies.md).
+#include "study/sweep.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <numeric>
+#include <optional>
+#include <set>
+
+#include "core/elements/registry.hpp"
+#include "io/diagnostics.hpp"
+#include "io/files.hpp"
+#include "io/model_loader.hpp"
+#include "study/run_analysis.hpp"
+
+namespace lash {
+namespace {
+
+using Diagnostics = std::vector<Diagnostic>;
+
+std::string number_text(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  // The shortest text that reads back to the same double.
+  for (int p = 1; p <= 17; ++p) {
+    char s[32];
+    std::snprintf(s, sizeof s, "%.*g", p, v);
+    if (std::strtod(s, nullptr) == v) return s;
+  }
+  return buf;
+}
+
+struct Reader {
+  std::string file;
+  Diagnostics list;
+  void error(const YAML::Node& n, const std::string& message) {
+    const YAML::Mark m = n.Mark();
+    list.push_back({file, m.line + 1, m.column + 1, "", message});
+  }
+  /// Keys of `map` outside `allowed` are reported with the closest allowed one.
+  void keys(const YAML::Node& map, const std::vector<std::string>& allowed, const std::string& where) {
+    for (const auto& kv : map) {
+      const std::string k = kv.first.as<std::string>("");
+      if (std::find(allowed.begin(), allowed.end(), k) != allowed.end()) continue;
+      const std::string near = closest_match(k, allowed);
+      error(kv.first, where + ": unknown key '" + k + "'" +
+                          (near.empty() ? "" : ", did you mean '" + near + "'?"));
+    }
+  }
+  bool number(const YAML::Node& n, const std::string& what, double& out) {
+    if (!n.IsScalar()) {
+      error(n, what + ": expected a number");
+      return false;
+    }
+    char* end = nullptr;
+    const std::string s = n.Scalar();
+    out = std::strtod(s.c_str(), &end);
+    if (s.empty() || *end != '\0' || !std::isfinite(out)) {
+      error(n, what + ": expected a finite number, got '" + s + "'");
+      return false;
+    }
+    return true;
+  }
+  bool integer(const YAML::Node& n, const std::string& what, long lo, long hi, long& out) {
+    double v = 0;
+    if (!number(n, what, v)) return false;
+    if (v != std::floor(v) || v < lo || v > hi) {
+      error(n, what + ": expected a whole number from " + std::to_string(lo) + " to " +
+                   std::to_string(hi) + ", got '" + n.Scalar() + "'");
+      return false;
+    }
+    out = static_cast<long>(v);
+    return true;
+  }
+  std::vector<std::string> names(const YAML::Node& n, const std::string& what) {
+    std::vector<std::string> out;
+    if (n.IsScalar()) return {n.Scalar()};
+    if (!n.IsSequence()) {
+      error(n, what + ": expected a channel name or a list of them");
+      return out;
+    }
+    for (const auto& e : n) {
+      if (!e.IsScalar()) error(e, what + ": expected a channel name");
+      else out.push_back(e.Scalar());
+    }
+    return out;
+  }
+};
+
+/// Text of a scalar or a flow-written list/map, as an override's value.
+std::string override_text(const YAML::Node& n) {
+  if (n.IsScalar()) return n.Scalar();
+  YAML::Emitter e;
+  e << YAML::Flow << n;
+  return e.c_str();
+}
+
+constexpr int kMaxRuns = 1000000;
+
+void read_parameter(Reader& r, const YAML::Node& key, const YAML::Node& v, StudySpec& spec,
+                    const std::function<std::string(const std::string&)>& load_model) {
+  StudyParameter p;
+  p.name = key.as<std::string>("");
+  const std::string where = "parameter '" + p.name + "'";
+  if (!v.IsMap()) {
+    r.error(v, where + ": expected {values: [...]}, {from, to, count}, {min, max} or {cases: {...}}");
+    return;
+  }
+  r.keys(v, {"values", "from", "to", "count", "scale", "min", "max", "cases"}, where);
+  const std::string scale = v["scale"] ? v["scale"].as<std::string>("") : "linear";
+  if (scale != "linear" && scale != "log") r.error(v["scale"], where + ": scale must be linear or log");
+  p.log = scale == "log";
+  const int kinds = (v["values"] ? 1 : 0) + (v["from"] || v["to"] || v["count"] ? 1 : 0) +
+                    (v["min"] || v["max"] ? 1 : 0) + (v["cases"] ? 1 : 0);
+  if (kinds != 1) {
+    r.error(v, where + ": give exactly one of values, from/to/count, min/max or cases");
+    return;
+  }
+  if (v["values"]) {
+    if (!v["values"].IsSequence() || v["values"].size() == 0) {
+      r.error(v["values"], where + ": values must be a non-empty list");
+      return;
+    }
+    for (const auto& e : v["values"]) {
+      p.values.push_back(override_text(e));
+      char* end = nullptr;
+      const double d = std::strtod(p.values.back().c_str(), &end);
+      p.numbers.push_back(!p.values.back().empty() && *end == '\0' ? d : std::nan(""));
+    }
+  } else if (v["from"] || v["to"] || v["count"]) {
+    double a = 0, b = 0;
+    long n = 0;
+    bool ok = true;
+    for (const char* k : {"from", "to", "count"})
+      if (!v[k]) {
+        r.error(v, where + ": a range needs from, to and count");
+        ok = false;
+      }
+    if (!ok) return;
+    ok = r.number(v["from"], where + ": from", a) & r.number(v["to"], where + ": to", b) &
+         r.integer(v["count"], where + ": count", 1, kMaxRuns, n);
+    if (!ok) return;
+    if (p.log && (a <= 0 || b <= 0)) {
+      r.error(v, where + ": a logarithmic range needs from > 0 and to > 0");
+      return;
+    }
+    for (long i = 0; i < n; ++i) {
+      const double f = n == 1 ? 0.0 : static_cast<double>(i) / (n - 1);
+      const double x = p.log ? std::exp(std::log(a) + f * (std::log(b) - std::log(a))) : a + f * (b - a);
+      const double xv = i == n - 1 && n > 1 ? b : x;  // the end point exactly as written
+      p.numbers.push_back(xv);
+      p.values.push_back(number_text(xv));
+    }
+  } else if (v["min"] || v["max"]) {
+    if (!v["min"] || !v["max"]) {
+      r.error(v, where + ": a sampled parameter needs min and max");
+      return;
+    }
+    if (!r.number(v["min"], where + ": min", p.min) || !r.number(v["max"], where + ": max", p.max))
+      return;
+    if (!(p.min < p.max)) r.error(v, where + ": min must be less than max");
+    if (p.log && p.min <= 0) r.error(v, where + ": a logarithmic range needs min > 0");
+    p.sampled = true;
+  } else {
+    const YAML::Node cases = v["cases"];
+    if (!cases.IsMap() || cases.size() == 0) {
+      r.error(cases, where + ": cases must be a map of case name to {path: value, ...}");
+      return;
+    }
+    for (const auto& c : cases) {
+      const std::string cname = c.first.as<std::string>("");
+      p.values.push_back(cname);
+      p.numbers.push_back(std::nan(""));
+      std::vector<std::string> ov;
+      std::string model;
+      if (!c.second.IsMap() && !c.second.IsNull()) {
+        r.error(c.second, where + ": case '" + cname + "': expected a map of path: value");
+      } else if (c.second.IsMap()) {
+        for (const auto& kv : c.second) {
+          const std::string k = kv.first.as<std::string>("");
+          if (k == "model") {
+            model = (std::filesystem::path(spec.file).parent_path() / kv.second.as<std::string>(""))
+                        .lexically_normal()
+                        .string();
+            try {
+              spec.model_texts.emplace(model, load_model(model));
+            } catch (const std::exception& e) {
+              r.error(kv.second, where + ": case '" + cname + "': " + e.what());
+            }
+          } else {
+            ov.push_back(k + "=" + override_text(kv.second));
+          }
+        }
+      }
+      p.case_overrides.push_back(ov);
+      p.case_models.push_back(model);
+    }
+  }
+  spec.parameters.push_back(std::move(p));
+}
+
+/// A fixed 64-bit generator (splitmix64): the same sequence everywhere.
+struct SplitMix {
+  unsigned long long s;
+  double uniform() {  // [0, 1)
+    unsigned long long z = (s += 0x9E3779B97F4A7C15ULL);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
+    z ^= z >> 31;
+    return static_cast<double>(z >> 11) * 0x1.0p-53;
+  }
+  size_t below(size_t n) { return std::min(n - 1, static_cast<size_t>(uniform() * n)); }
+};
+
+}  // namespace
+
+StudySpec load_study_text(const std::string& text, const std::string& file,
+                          const std::function<std::string(const std::string&)>& read) {
+  StudySpec spec;
+  spec.file = file;
+  spec.text = text;
+  Reader r{file, {}};
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    throw ModelError({{file, e.mark.line + 1, e.mark.column + 1, "", "not valid YAML: " + e.msg}});
+  }
+  if (!root.IsMap())
+    throw ModelError({{file, 1, 1, "", "expected a study (a map with study, model, parameters, ...)"}});
+  r.keys(root, {"study", "model", "set", "parameters", "combine", "sampling", "keep", "transient",
+                "lyapunov"},
+         "study");
+  spec.name = root["study"] && root["study"].IsScalar() ? root["study"].Scalar() : "study";
+  if (!root["model"] || !root["model"].IsScalar()) {
+    r.error(root, "study: 'model' (the base model file, relative to this file) is missing");
+    throw ModelError(r.list);
+  }
+  spec.model = (std::filesystem::path(file).parent_path() / root["model"].Scalar()).lexically_normal().string();
+  try {
+    spec.model_texts.emplace(spec.model, read(spec.model));
+  } catch (const std::exception& e) {
+    r.error(root["model"], std::string("model: ") + e.what());
+    throw ModelError(r.list);
+  }
+  if (const YAML::Node set = root["set"]) {
+    if (!set.IsMap()) r.error(set, "set: expected a map of model path: value");
+    else
+      for (const auto& kv : set) spec.fixed.push_back(kv.first.as<std::string>("") + "=" + override_text(kv.second));
+  }
+  const YAML::Node params = root["parameters"];
+  if (!params || !params.IsMap() || params.size() == 0) {
+    r.error(params ? params : root, "parameters: expected a map of model path (or case name) to its levels");
+    throw ModelError(r.list);
+  }
+  for (const auto& kv : params) read_parameter(r, kv.first, kv.second, spec, read);
+  if (const YAML::Node c = root["combine"]) {
+    spec.combine = c.as<std::string>("");
+    if (spec.combine != "cross" && spec.combine != "zip")
+      r.error(c, "combine: expected cross (every combination) or zip (level by level), got '" + spec.combine + "'");
+  }
+  const bool any_sampled = std::any_of(spec.parameters.begin(), spec.parameters.end(),
+                                       [](const StudyParameter& p) { return p.sampled; });
+  if (const YAML::Node s = root["sampling"]) {
+    r.keys(s, {"method", "count", "seed"}, "sampling");
+    spec.sampling = s["method"] ? s["method"].as<std::string>("") : "latin_hypercube";
+    if (spec.sampling != "random" && spec.sampling != "latin_hypercube")
+      r.error(s, "sampling: method must be random or latin_hypercube");
+    long n = 0, seed = 1;
+    if (!s["count"]) r.error(s, "sampling: count is missing");
+    else if (r.integer(s["count"], "sampling: count", 1, kMaxRuns, n)) spec.samples = static_cast<int>(n);
+    if (s["seed"] && r.integer(s["seed"], "sampling: seed", 0, std::numeric_limits<long>::max(), seed))
+      spec.seed = static_cast<unsigned long long>(seed);
+  }
+  if (any_sampled && spec.sampling.empty())
+    r.error(root, "parameters with min/max are drawn: add sampling: {method: latin_hypercube, count: N}");
+  if (!any_sampled && !spec.sampling.empty())
+    r.error(root["sampling"], "sampling: no parameter has min/max to draw");
+  if (any_sampled && spec.combine == "zip")
+    r.error(root["combine"], "combine: zip is for listed levels; sampled parameters are drawn together");
+  if (spec.combine == "zip") {
+    for (const auto& p : spec.parameters)
+      if (p.values.size() != spec.parameters.front().values.size())
+        r.error(params, "combine: zip needs the same number of levels for every parameter ('" +
+                            p.name + "' has " + std::to_string(p.values.size()) + ", '" +
+                            spec.parameters.front().name + "' has " +
+                            std::to_string(spec.parameters.front().values.size()) + ")");
+  }
+  if (const YAML::Node k = root["keep"]) {
+    r.keys(k, {"channels", "sections", "series"}, "keep");
+    if (k["channels"]) spec.channels = r.names(k["channels"], "keep: channels");
+    if (k["sections"]) spec.section_channels = r.names(k["sections"], "keep: sections");
+    if (const YAML::Node s = k["series"]) {
+      r.keys(s, {"channels", "points"}, "keep: series");
+      if (s["channels"]) spec.series = r.names(s["channels"], "keep: series: channels");
+      long n = 0;
+      if (s["points"] && r.integer(s["points"], "keep: series: points", 2, 100000, n))
+        spec.series_points = static_cast<int>(n);
+    }
+  }
+  if (const YAML::Node t = root["transient"]) {
+    r.keys(t, {"periods", "time"}, "transient");
+    long n = 0;
+    if (t["periods"] && r.integer(t["periods"], "transient: periods", 0, 1000000, n))
+      spec.discard_periods = static_cast<int>(n);
+    double s = 0;
+    if (t["time"] && r.number(t["time"], "transient: time", s)) {
+      if (s < 0) r.error(t["time"], "transient: time must be >= 0 s");
+      spec.discard_time = s;
+    }
+  }
+  if (const YAML::Node l = root["lyapunov"]) {
+    if (l.Scalar() != "true" && l.Scalar() != "false") r.error(l, "lyapunov: expected true or false");
+    spec.lyapunov = l.Scalar() == "true";
+  }
+  if (!r.list.empty()) throw ModelError(r.list);
+
+  // How many runs: refused past kMaxRuns before anything is listed.
+  double n = 1;
+  if (any_sampled) n = spec.samples;
+  if (spec.combine == "zip") n *= spec.parameters.front().values.size();
+  else
+    for (const auto& p : spec.parameters)
+      if (!p.sampled) n *= static_cast<double>(p.values.size());
+  if (n > kMaxRuns)
+    throw ModelError({{file, 1, 1, "", "the study has " + number_text(n) + " runs; at most " +
+                                           std::to_string(kMaxRuns) + " in one study"}});
+
+  // The study must make at least one model: the first runs are loaded until one is, so a typo in
+  // a path fails now rather than in every run (a value that is bad in some runs only is recorded
+  // as that run's error). The channels it keeps must exist in that model.
+  const auto runs = study_runs(spec);
+  std::optional<ModelError> first_error;
+  std::optional<LoadedModel> lm;
+  for (size_t i = 0; i < runs.size() && i < 100 && !lm; ++i) {
+    try {
+      lm = load_model_text(spec.model_texts.at(runs[i].model), runs[i].model, runs[i].overrides);
+    } catch (const ModelError& e) {
+      if (!first_error) {
+        Diagnostics list;
+        for (auto d : e.diagnostics()) {
+          d.message = "in run " + std::to_string(runs[i].index) + " of " + file + ": " + d.message;
+          list.push_back(d);
+        }
+        first_error = ModelError(list);
+      }
+    }
+  }
+  if (!lm) throw *first_error;
+  const auto info = channel_info(lm->model, Workspace(lm->model));
+  std::vector<std::string> names;
+  for (const auto& c : info) names.push_back(c.name);
+  for (const auto* group : {&spec.channels, &spec.section_channels, &spec.series})
+    for (const auto& c : *group)
+      if (std::find(names.begin(), names.end(), c) == names.end()) {
+        const std::string near = closest_match(c, names);
+        r.error(root["keep"], "keep: no channel '" + c + "' in the model" +
+                                  (near.empty() ? "" : ", did you mean '" + near + "'?"));
+      }
+  if (!r.list.empty()) throw ModelError(r.list);
+  return spec;
+}
+
+StudySpec load_study_file(const std::string& file) {
+  std::string text;
+  try {
+    text = read_input_file(file, kMaxModelFileBytes);
+  } catch (const std::exception& e) {
+    throw ModelError({{file, 0, 0, "", std::string("cannot read the study file: ") + e.what()}});
+  }
+  return load_study_text(text, file, [](const std::string& path) {
+    return read_input_file(path, kMaxModelFileBytes);
+  });
+}
+
+std::vector<StudyRun> study_runs(const StudySpec& spec) {
+  const size_t np = spec.parameters.size();
+  // Level index of each parameter, per run; sampled parameters carry the drawn value instead.
+  std::vector<std::vector<size_t>> levels;
+  std::vector<std::vector<double>> drawn;  // per run, per parameter (sampled ones)
+  std::vector<size_t> listed;
+  for (size_t i = 0; i < np; ++i)
+    if (!spec.parameters[i].sampled) listed.push_back(i);
+  std::vector<std::vector<size_t>> combos(1, std::vector<size_t>(np, 0));
+  if (spec.combine == "zip") {
+    combos.clear();
+    for (size_t k = 0; k < spec.parameters.front().values.size(); ++k) combos.push_back(std::vector<size_t>(np, k));
+  } else {
+    // Cross: the first parameter varies slowest (row-major), so a one-parameter sweep keeps its order.
+    for (size_t i : listed) {
+      std::vector<std::vector<size_t>> next;
+      for (const auto& c : combos)
+        for (size_t k = 0; k < spec.parameters[i].values.size(); ++k) {
+          auto d = c;
+          d[i] = k;
+          next.push_back(d);
+        }
+      combos = std::move(next);
+    }
+  }
+  const int n_samples = spec.sampling.empty() ? 1 : spec.samples;
+  std::vector<std::vector<double>> samples(n_samples, std::vector<double>(np, 0.0));
+  if (!spec.sampling.empty()) {
+    SplitMix g{spec.seed};
+    for (size_t i = 0; i < np; ++i) {
+      const StudyParameter& p = spec.parameters[i];
+      if (!p.sampled) continue;
+      std::vector<size_t> strata(n_samples);
+      std::iota(strata.begin(), strata.end(), 0);
+      if (spec.sampling == "latin_hypercube")  // Fisher–Yates with the fixed generator
+        for (size_t k = strata.size(); k > 1; --k) std::swap(strata[k - 1], strata[g.below(k)]);
+      for (int s = 0; s < n_samples; ++s) {
+        const double u = spec.sampling == "latin_hypercube" ? (strata[s] + g.uniform()) / n_samples : g.uniform();
+        samples[s][i] = p.log ? std::exp(std::log(p.min) + u * (std::log(p.max) - std::log(p.min)))
+                              : p.min + u * (p.max - p.min);
+      }
+    }
+  }
+  std::vector<StudyRun> runs;
+  for (const auto& c : combos)
+    for (int s = 0; s < n_samples; ++s) {
+      StudyRun run;
+      run.index = static_cast<int>(runs.size());
+      run.model = spec.model;
+      run.overrides = spec.fixed;
+      for (size_t i = 0; i < np; ++i) {
+        const StudyParameter& p = spec.parameters[i];
+        if (p.sampled) {
+          run.numbers.push_back(samples[s][i]);
+          run.values.push_back(number_text(samples[s][i]));
+          run.overrides.push_back(p.name + "=" + run.values.back());
+        } else if (!p.case_overrides.empty()) {
+          run.values.push_back(p.values[c[i]]);
+          run.numbers.push_back(std::nan(""));
+          if (!p.case_models[c[i]].empty()) run.model = p.case_models[c[i]];
+          for (const auto& o : p.case_overrides[c[i]]) run.overrides.push_back(o);
+        } else {
+          run.values.push_back(p.values[c[i]]);
+          run.numbers.push_back(p.numbers[c[i]]);
+          run.overrides.push_back(p.name + "=" + p.values[c[i]]);
+        }
+      }
+      runs.push_back(std::move(run));
+    }
+  return runs;
+}
+
+namespace {
+
+/// Keeps the study's channels at every section and, decimated, at the outputs.
+class Keep : public Observer {
+ public:
+  Keep(const Model& model, const Workspace& ws, const StudySpec& spec, RunRecord& rec, double t_transient)
+      : model_(model), rec_(rec), t_transient_(t_transient) {
+    const auto info = channel_info(model, ws);
+    auto index = [&](const std::string& n) {
+      for (size_t i = 0; i < info.size(); ++i)
+        if (info[i].name == n) return static_cast<int>(i);
+      throw std::invalid_argument("no channel '" + n + "' in this run's model");
+    };
+    for (const auto& c : spec.section_channels) section_index_.push_back(index(c));
+    for (const auto& c : spec.series) series_index_.push_back(index(c));
+    values_.assign(info.size(), 0.0);
+    const double n_out = std::ceil(model.solver.end_time / model.solver.output_interval - 1e-9) + 1;
+    every_ = std::max<long>(1, static_cast<long>(std::ceil(n_out / std::max(1, spec.series_points))));
+    rec_.section_channels = spec.section_channels;
+    rec_.series_channels = spec.series;
+    rec_.series_values.assign(series_index_.size(), {});
+  }
+  void output(double t, const Eigen::VectorXd& y, const Workspace& ws) override {
+    if (series_index_.empty() || count_++ % every_ != 0) return;
+    channel_values(model_, ws, y, values_.data());
+    rec_.series_time.push_back(t);
+    for (size_t k = 0; k < series_index_.size(); ++k) rec_.series_values[k].push_back(values_[series_index_[k]]);
+  }
+  void section(double t, const Eigen::VectorXd& y, const Workspace& ws) override {
+    if (section_index_.empty() || t < t_transient_ - 1e-12) return;
+    channel_values(model_, ws, y, values_.data());
+    rec_.section_times.push_back(t);
+    std::vector<double> v;
+    for (int i : section_index_) v.push_back(values_[i]);
+    rec_.section_values.push_back(std::move(v));
+  }
+
+ private:
+  const Model& model_;
+  RunRecord& rec_;
+  double t_transient_;
+  std::vector<int> section_index_, series_index_;
+  std::vector<double> values_;
+  long every_ = 1, count_ = 0;
+};
+
+}  // namespace
+
+RunRecord run_study_point(const StudySpec& spec, const StudyRun& run, const std::atomic<int>* interrupt) {
+  RunRecord rec;
+  rec.index = run.index;
+  const auto start = std::chrono::steady_clock::now();
+  auto elapsed = [&] {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  };
+  try {
+    const LoadedModel lm = load_model_text(spec.model_texts.at(run.model), run.model, run.overrides);
+    const Model& model = lm.model;
+    const Driver* drv = period_driver(model, "");
+    const double period = drv ? 2 * M_PI / std::abs(drv->speed) : 0.0;
+    const double t_transient = period > 0 ? spec.discard_periods * period : std::max(0.0, spec.discard_time);
+    if (t_transient >= model.solver.end_time)
+      throw std::invalid_argument("the transient (" + number_text(t_transient) +
+                                  " s) is not shorter than end_time (" +
+                                  number_text(model.solver.end_time) + " s)");
+    AnalysisOptions ao;
+    ao.ideal_twin = false;
+    ao.lyapunov = spec.lyapunov;
+    ao.discard_periods = spec.discard_periods;
+    ao.interrupt = interrupt;
+    ao.stats_t0 = t_transient;
+    ao.display_points = 50;
+    ao.frames = 2;
+    Workspace ws(model);
+    Keep keep(model, ws, spec, rec, t_transient);
+    const RunAnalysis ra = analyze_run(model, ao, &keep);
+    const RunResult& res = ra.result;
+    rec.t_reached = res.status.t;
+    rec.steps = res.stats.steps;
+    rec.rhs_evaluations = res.stats.rhs_evaluations;
+    rec.events = res.stats.events;
+    if (res.status.outcome == RunOutcome::interrupted) {
+      rec.status = "interrupted";
+      rec.message = res.status.message;
+      rec.wall_seconds = elapsed();
+      return rec;
+    }
+    rec.status = res.status.ok ? "completed" : "failed";
+    rec.message = res.status.ok ? "" : res.status.message;
+    rec.verdict = ra.verdict.kind;
+    // Metrics: the kept channels (default: each clearance joint's Fn), the clearance joints'
+    // contact modes, the verdict's numbers; all after the transient.
+    std::vector<std::string> channels = spec.channels;
+    if (channels.empty())
+      for (const auto& c : ra.clearance) channels.push_back(c.joint + ".Fn");
+    for (const auto& name : channels)
+      for (const auto& s : ra.statistics)
+        if (s.channel == name) {
+          rec.metrics.push_back({name + ".peak", s.peak});
+          rec.metrics.push_back({name + ".max", s.max});
+          rec.metrics.push_back({name + ".min", s.min});
+          rec.metrics.push_back({name + ".rms", s.rms});
+        }
+    for (const auto& c : ra.clearance) {
+      double vmax = 0;
+      for (double v : c.modes.impact_velocities) vmax = std::max(vmax, std::abs(v));
+      rec.metrics.push_back({c.joint + ".impacts", static_cast<double>(c.modes.impacts)});
+      rec.metrics.push_back({c.joint + ".impact_share", c.modes.impact_share});
+      rec.metrics.push_back({c.joint + ".continuous_share", c.modes.continuous_share});
+      rec.metrics.push_back({c.joint + ".free_flight_share", c.modes.free_flight_share});
+      rec.metrics.push_back({c.joint + ".max_impact_velocity", vmax});
+    }
+    rec.metrics.push_back({"sections", static_cast<double>(ra.verdict.sections)});
+    rec.metrics.push_back({"distinct_points", static_cast<double>(ra.verdict.distinct_points)});
+    if (!std::isnan(ra.verdict.lyapunov_exponent))
+      rec.metrics.push_back({"lyapunov_exponent", ra.verdict.lyapunov_exponent});
+  } catch (const ModelError& e) {
+    rec.status = "error";
+    rec.message = e.what();
+  } catch (const std::exception& e) {
+    rec.status = "error";
+    rec.message = e.what();
+  }
+  rec.wall_seconds = elapsed();
+  return rec;
+}
+
+nlohmann::json to_json(const RunRecord& r) {
+  nlohmann::json m = nlohmann::json::array();
+  for (const auto& [k, v] : r.metrics) m.push_back({k, v});
+  return {{"index", r.index},
+          {"status", r.status},
+          {"message", r.message},
+          {"t_reached", r.t_reached},
+          {"wall_seconds", r.wall_seconds},
+          {"steps", r.steps},
+          {"rhs_evaluations", r.rhs_evaluations},
+          {"events", r.events},
+          {"verdict", r.verdict},
+          {"metrics", m},
+          {"section_channels", r.section_channels},
+          {"section_times", r.section_times},
+          {"section_values", r.section_values},
+          {"series_channels", r.series_channels},
+          {"series_time", r.series_time},
+          {"series_values", r.series_values}};
+}
+
+RunRecord record_from_json(const nlohmann::json& j) {
+  RunRecord r;
+  r.index = j.at("index");
+  r.status = j.at("status");
+  r.message = j.at("message");
+  r.t_reached = j.at("t_reached");
+  r.wall_seconds = j.at("wall_seconds");
+  r.steps = j.at("steps");
+  r.rhs_evaluations = j.at("rhs_evaluations");
+  r.events = j.at("events");
+  r.verdict = j.at("verdict");
+  for (const auto& m : j.at("metrics")) r.metrics.push_back({m.at(0).get<std::string>(), m.at(1).get<double>()});
+  r.section_channels = j.at("section_channels").get<std::vector<std::string>>();
+  r.section_times = j.at("section_times").get<std::vector<double>>();
+  r.section_values = j.at("section_values").get<std::vector<std::vector<double>>>();
+  r.series_channels = j.at("series_channels").get<std::vector<std::string>>();
+  r.series_time = j.at("series_time").get<std::vector<double>>();
+  r.series_values = j.at("series_values").get<std::vector<std::vector<double>>>();
+  return r;
+}
+
+}  // namespace lash

@@ -1,0 +1,100 @@
+#pragma once
+/// @file sweep.hpp
+/// Parameter studies: a study file (docs/studies.md) names a base model, the model values to
+/// vary (by path, as `--set` does), how to combine them, and what to keep from each run. This
+/// file turns it into a list of runs and runs one of them into a RunRecord: status, metrics,
+/// the chosen channels at the Poincaré sections after the transient (the bifurcation diagram's
+/// points) and decimated series. Scheduling (threads, MPI) and the database are the caller's.
+#include <atomic>
+#include <functional>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "nlohmann/json.hpp"
+
+namespace lash {
+
+/// One varied model value.
+struct StudyParameter {
+  std::string name;                  ///< the model path (drivers.crank.speed_rpm) or a case name
+  std::vector<std::string> values;   ///< override texts, one per level ("3000", "hertz")
+  std::vector<double> numbers;       ///< the same as numbers (NaN for text values)
+  double min = 0.0, max = 0.0;       ///< sampled parameters: the range
+  bool sampled = false;              ///< drawn by `sampling` between min and max
+  bool log = false;                  ///< sampled on a logarithmic scale
+  /// Cases: each level is a named set of overrides (and optionally another model file).
+  std::vector<std::vector<std::string>> case_overrides;
+  std::vector<std::string> case_models;  ///< "" = the study's model
+};
+
+struct StudySpec {
+  std::string file;                  ///< the study file, as named on the command line
+  std::string text;                  ///< its text
+  std::string name;
+  std::string model;                 ///< the base model file (resolved against the study's folder)
+  std::map<std::string, std::string> model_texts;  ///< every model file the study uses, by path
+  std::vector<std::string> fixed;    ///< overrides applied to every run ("a.b=v")
+  std::vector<StudyParameter> parameters;
+  std::string combine = "cross";     ///< cross (every combination) or zip (level by level)
+  std::string sampling;              ///< "", random or latin_hypercube
+  int samples = 0;
+  unsigned long long seed = 1;
+  std::vector<std::string> channels;          ///< metrics (peak, max, min, rms) of these channels
+  std::vector<std::string> section_channels;  ///< channels kept at each Poincaré section
+  std::vector<std::string> series;            ///< channels kept as decimated series
+  int series_points = 200;
+  int discard_periods = 5;           ///< transient: periods of the period driver skipped
+  double discard_time = -1.0;        ///< transient in s when the model has no period driver
+  bool lyapunov = false;
+};
+
+/// Reads `text`, the study file `file`; `read(path)` returns the text of a model file it names
+/// (paths resolved against the study file's folder). Throws ModelError with file:line:column for
+/// every problem found, including the base model's own and parameter paths it does not have.
+StudySpec load_study_text(const std::string& text, const std::string& file,
+                          const std::function<std::string(const std::string&)>& read);
+/// As load_study_text, reading the files from disk.
+StudySpec load_study_file(const std::string& file);
+
+/// One run of a study: its index (stable: the study's runs in a fixed order), the level of each
+/// parameter, and the overrides that make its model.
+struct StudyRun {
+  int index = 0;
+  std::vector<std::string> values;    ///< per parameter, as written into the model (case name for cases)
+  std::vector<double> numbers;        ///< per parameter, NaN for text
+  std::string model;                  ///< model file
+  std::vector<std::string> overrides; ///< fixed ones first
+};
+/// Every run of the study, in index order. Sampled parameters are drawn from `seed` with a
+/// generator whose sequence is fixed here (not the standard library's distributions), so a study
+/// gives the same runs on every machine.
+std::vector<StudyRun> study_runs(const StudySpec& spec);
+
+/// What a study keeps of one run.
+struct RunRecord {
+  int index = 0;
+  std::string status;                 ///< completed, failed (integrator), error (model, parameters)
+  std::string message;                ///< why it failed
+  double t_reached = 0.0;             ///< s
+  double wall_seconds = 0.0;
+  long steps = 0, rhs_evaluations = 0, events = 0;
+  std::string verdict;                ///< periodic, quasi-periodic, chaotic, undetermined, or ""
+  std::vector<std::pair<std::string, double>> metrics;  ///< in a fixed order
+  std::vector<std::string> section_channels;
+  std::vector<double> section_times;               ///< s, after the transient
+  std::vector<std::vector<double>> section_values; ///< [section][channel]
+  std::vector<std::string> series_channels;
+  std::vector<double> series_time;
+  std::vector<std::vector<double>> series_values;  ///< [channel][sample]
+};
+nlohmann::json to_json(const RunRecord& r);
+RunRecord record_from_json(const nlohmann::json& j);
+
+/// Runs one point of the study. Never throws for a bad parameter combination or a failing run:
+/// the record says what happened. `interrupt` (a signal number when set) stops the run at its
+/// next output; the record is then "interrupted" and must not be kept.
+RunRecord run_study_point(const StudySpec& spec, const StudyRun& run,
+                          const std::atomic<int>* interrupt = nullptr);
+
+}  // namespace lash
