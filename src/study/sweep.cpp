@@ -25,6 +25,10 @@ using Diagnostics = std::vector<Diagnostic>;
 std::string number_text(double v) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%.17g", v);
+  if (v == std::floor(v) && std::abs(v) < 1e15) {  // whole numbers as written: 3000, not 3e+03
+    std::snprintf(buf, sizeof buf, "%.0f", v);
+    return buf;
+  }
   // The shortest text that reads back to the same double.
   for (int p = 1; p <= 17; ++p) {
     char s[32];

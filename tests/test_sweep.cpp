@@ -1,0 +1,381 @@
+// Parameter studies: study files, their runs, one run's record, the study database, the
+// bifurcation diagram's period detection, and `lash sweep` as a user runs it (kill -9 and
+// --resume, a failing run, the report).
+#include <gtest/gtest.h>
+#include <sqlite3.h>
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <thread>
+
+#include "analysis/bifurcation.hpp"
+#include "io/diagnostics.hpp"
+#include "study/study_db.hpp"
+#include "study/sweep.hpp"
+#include "test_support.hpp"
+
+namespace fs = std::filesystem;
+using namespace lash;
+
+namespace {
+
+fs::path temp_dir(const std::string& name) {
+  const fs::path d = fs::temp_directory_path() / ("lash_sweep_" + name + "_" + std::to_string(getpid()));
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
+std::string example() { return lash::test::example_path("flores_slider_crank.yaml"); }
+
+/// A study file in `dir` over the Flores example; `body` is everything after `model:`.
+fs::path write_study(const fs::path& dir, const std::string& body, const std::string& name = "s.yaml") {
+  const fs::path p = dir / name;
+  std::ofstream(p) << "study: test\nmodel: " << example() << "\n" << body;
+  return p;
+}
+
+StudySpec from_text(const std::string& body) {
+  const std::string text = "study: test\nmodel: " + example() + "\n" + body;
+  return load_study_text(text, "s.yaml", [](const std::string& p) { return lash::test::read_file(p); });
+}
+
+struct Result {
+  int code;
+  std::string out;
+};
+Result sh(const std::string& command) {
+  FILE* p = popen((command + " 2>&1").c_str(), "r");
+  std::string out;
+  char buf[4096];
+  while (size_t n = fread(buf, 1, sizeof buf, p)) out.append(buf, n);
+  const int status = pclose(p);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
+}
+Result lash_cmd(const std::string& args) { return sh(std::string(LASH_BINARY) + " " + args); }
+
+/// Rows of a query on a study database, each as "a|b|c".
+std::vector<std::string> query(const fs::path& db, const std::string& sql) {
+  sqlite3* h = nullptr;
+  EXPECT_EQ(sqlite3_open_v2(db.c_str(), &h, SQLITE_OPEN_READONLY, nullptr), SQLITE_OK);
+  sqlite3_busy_timeout(h, 5000);
+  std::vector<std::string> rows;
+  sqlite3_exec(
+      h, sql.c_str(),
+      [](void* out, int n, char** v, char**) {
+        std::string row;
+        for (int i = 0; i < n; ++i) row += (i ? "|" : "") + std::string(v[i] ? v[i] : "NULL");
+        static_cast<std::vector<std::string>*>(out)->push_back(row);
+        return 0;
+      },
+      &rows, nullptr);
+  sqlite3_close(h);
+  return rows;
+}
+
+}  // namespace
+
+TEST(StudyFile, CrossZipRangesAndCases) {
+  const StudySpec cross = from_text(
+      "parameters:\n"
+      "  drivers.crank.speed_rpm: {from: 1000, to: 3000, count: 3}\n"
+      "  joints.rod_slider.clearance: {values: [1.0e-4, 2.0e-4]}\n");
+  const auto runs = study_runs(cross);
+  ASSERT_EQ(runs.size(), 6u);
+  // The first parameter varies slowest.
+  EXPECT_EQ(runs[0].values, (std::vector<std::string>{"1000", "1.0e-4"}));
+  EXPECT_EQ(runs[1].values, (std::vector<std::string>{"1000", "2.0e-4"}));
+  EXPECT_EQ(runs[5].values, (std::vector<std::string>{"3000", "2.0e-4"}));
+  EXPECT_EQ(runs[3].overrides.back(), "joints.rod_slider.clearance=2.0e-4");
+  EXPECT_DOUBLE_EQ(runs[2].numbers[0], 2000.0);
+
+  const StudySpec zip = from_text(
+      "combine: zip\n"
+      "parameters:\n"
+      "  drivers.crank.speed_rpm: {values: [1000, 2000]}\n"
+      "  joints.rod_slider.clearance: {values: [1.0e-4, 2.0e-4]}\n");
+  ASSERT_EQ(study_runs(zip).size(), 2u);
+  EXPECT_EQ(study_runs(zip)[1].values, (std::vector<std::string>{"2000", "2.0e-4"}));
+
+  // A logarithmic range ends exactly on its bounds and is geometric in between.
+  const StudySpec log = from_text(
+      "parameters:\n  joints.rod_slider.clearance: {from: 1.0e-5, to: 1.0e-3, count: 3, scale: log}\n");
+  const auto lr = study_runs(log);
+  EXPECT_DOUBLE_EQ(lr[0].numbers[0], 1e-5);
+  EXPECT_NEAR(lr[1].numbers[0], 1e-4, 1e-18);
+  EXPECT_DOUBLE_EQ(lr[2].numbers[0], 1e-3);
+
+  // Cases: named sets of overrides, one of them another model file.
+  const StudySpec cases = from_text(
+      "parameters:\n"
+      "  location:\n"
+      "    cases:\n"
+      "      rod_slider: {}\n"
+      "      crank_rod: {model: " + lash::test::example_path("flores_slider_crank_crank_rod_clearance.yaml") +
+      ", joints.crank_rod.clearance: 2.0e-4}\n");
+  const auto cr = study_runs(cases);
+  ASSERT_EQ(cr.size(), 2u);
+  EXPECT_EQ(cr[1].values[0], "crank_rod");
+  EXPECT_NE(cr[1].model.find("crank_rod_clearance"), std::string::npos);
+  EXPECT_EQ(cr[1].overrides.back(), "joints.crank_rod.clearance=2.0e-4");
+  EXPECT_EQ(cr[0].model, cases.model);
+}
+
+TEST(StudyFile, LatinHypercubeFillsEveryStratumOnceAndIsReproducible) {
+  const std::string body =
+      "sampling: {method: latin_hypercube, count: 20, seed: 7}\n"
+      "parameters:\n"
+      "  drivers.crank.speed_rpm: {min: 1000, max: 5000}\n"
+      "  joints.rod_slider.clearance: {min: 1.0e-4, max: 5.0e-4}\n";
+  const auto a = study_runs(from_text(body));
+  const auto b = study_runs(from_text(body));
+  ASSERT_EQ(a.size(), 20u);
+  for (int p = 0; p < 2; ++p) {
+    const double lo = p == 0 ? 1000 : 1e-4, hi = p == 0 ? 5000 : 5e-4;
+    std::set<int> strata;
+    for (const auto& r : a) {
+      EXPECT_GE(r.numbers[p], lo);
+      EXPECT_LT(r.numbers[p], hi);
+      strata.insert(static_cast<int>((r.numbers[p] - lo) / (hi - lo) * 20));
+    }
+    EXPECT_EQ(strata.size(), 20u) << "parameter " << p << ": one sample per stratum";
+  }
+  for (size_t i = 0; i < a.size(); ++i) EXPECT_EQ(a[i].overrides, b[i].overrides);
+  // Another seed, other samples.
+  const auto c = study_runs(from_text(
+      "sampling: {method: latin_hypercube, count: 20, seed: 8}\nparameters:\n"
+      "  drivers.crank.speed_rpm: {min: 1000, max: 5000}\n"));
+  EXPECT_NE(c[0].numbers[0], a[0].numbers[0]);
+}
+
+TEST(StudyFile, ProblemsAreLocatedInTheStudyFile) {
+  auto problems = [](const std::string& body) {
+    try {
+      from_text(body);
+    } catch (const ModelError& e) {
+      std::string all;
+      for (const auto& d : e.diagnostics()) all += d.str() + "\n";
+      return all;
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(problems("parameters:\n  drivers.crank.speed_rpm: {form: 1, to: 2, count: 3}\n")
+                .find("s.yaml:4:29: parameter 'drivers.crank.speed_rpm': unknown key 'form'"),
+            std::string::npos)
+      << problems("parameters:\n  drivers.crank.speed_rpm: {form: 1, to: 2, count: 3}\n");
+  // A path the model does not have: the model loader's message, said to come from the study.
+  EXPECT_NE(problems("parameters:\n  drivers.crank.speed_rpm: {values: [1], scal: log}\n")
+                .find("unknown key 'scal', did you mean 'scale'?"),
+            std::string::npos);
+  const std::string typo = problems("parameters:\n  drivers.crank.sped_rpm: {values: [1000]}\n");
+  EXPECT_NE(typo.find("in run 0 of s.yaml"), std::string::npos) << typo;
+  const std::string channel =
+      problems("parameters:\n  drivers.crank.speed_rpm: {values: [1000]}\nkeep: {channels: [slider.axx]}\n");
+  EXPECT_NE(channel.find("no channel 'slider.axx' in the model, did you mean 'slider.ax'?"), std::string::npos)
+      << channel;
+  EXPECT_NE(problems("parameters:\n  drivers.crank.speed_rpm: {from: 1, to: 2, count: 0}\n")
+                .find("count: expected a whole number from 1"),
+            std::string::npos);
+  EXPECT_NE(problems("combine: zip\nparameters:\n  drivers.crank.speed_rpm: {values: [1, 2]}\n"
+                     "  joints.rod_slider.clearance: {values: [1.0e-4]}\n")
+                .find("zip needs the same number of levels"),
+            std::string::npos);
+  EXPECT_NE(problems("parameters:\n  drivers.crank.speed_rpm: {min: 1, max: 2}\n").find("add sampling"),
+            std::string::npos);
+}
+
+TEST(StudyRun, ABadParameterCombinationIsRecordedNotThrown) {
+  const StudySpec spec = from_text(
+      "set: {solver.end_time: 0.03}\n"
+      "parameters:\n  joints.rod_slider.clearance: {values: [2.0e-4, -1.0e-4]}\n"
+      "transient: {periods: 1}\n"
+      "keep: {sections: [rod_slider.ex]}\n");
+  const auto runs = study_runs(spec);
+  const RunRecord good = run_study_point(spec, runs[0]);
+  EXPECT_EQ(good.status, "completed") << good.message;
+  EXPECT_NEAR(good.t_reached, 0.03, 1e-12);
+  // 0.03 s at 5000 rpm: 2.5 periods, one discarded: sections at 0.012 and 0.024 s.
+  ASSERT_EQ(good.section_times.size(), 2u);
+  EXPECT_NEAR(good.section_times[0], 0.012, 1e-12);
+  bool has_impacts = false;
+  for (const auto& [name, v] : good.metrics) has_impacts |= name == "rod_slider.impacts" && v > 0;
+  EXPECT_TRUE(has_impacts);
+  const RunRecord bad = run_study_point(spec, runs[1]);
+  EXPECT_EQ(bad.status, "error");
+  EXPECT_NE(bad.message.find("clearance"), std::string::npos) << bad.message;
+  // The record survives the trip to another process unchanged.
+  const RunRecord back = record_from_json(nlohmann::json::parse(to_json(good).dump()));
+  EXPECT_EQ(to_json(back), to_json(good));
+  EXPECT_EQ(back.section_values, good.section_values);
+}
+
+TEST(StudyDatabase, KeepsRunsAndRefusesAnotherStudy) {
+  const fs::path dir = temp_dir("db");
+  const StudySpec spec = from_text("parameters:\n  drivers.crank.speed_rpm: {values: [1000, fast]}\n");
+  const auto runs = study_runs(spec);
+  RunRecord r;
+  r.index = 1;
+  r.status = "error";
+  r.message = "a, \"quoted\" message";
+  r.metrics = {{"x.peak", 2.5}};
+  r.section_channels = {"a"};
+  r.section_times = {0.1, 0.2};
+  r.section_values = {{1.0}, {2.0}};
+  {
+    StudyDb db((dir / "study.db").string(), spec, 2);
+    db.add(runs[1], r, "thread 0");
+    EXPECT_EQ(db.finished(), (std::set<int>{1}));
+    db.export_csv(dir.string());
+  }
+  const StudyTable t = read_study((dir / "study.db").string());
+  ASSERT_EQ(t.rows.size(), 1u);
+  EXPECT_EQ(t.rows[0].values[0], "fast");
+  EXPECT_TRUE(std::isnan(t.rows[0].numbers[0]));
+  EXPECT_EQ(t.rows[0].metrics[0].second, 2.5);
+  ASSERT_EQ(t.points.size(), 1u);
+  EXPECT_EQ(t.points[0][1].second, 2.0);
+  const std::string csv = lash::test::read_file((dir / "runs.csv").string());
+  EXPECT_NE(csv.find("run,drivers.crank.speed_rpm,status,verdict,wall_seconds,x.peak,message"), std::string::npos) << csv;
+  EXPECT_NE(csv.find("1,fast,error,,"), std::string::npos) << csv;
+  EXPECT_NE(csv.find("\"a, \"\"quoted\"\" message\""), std::string::npos) << csv;
+  // Another study file into the same database: refused, nothing mixed.
+  const StudySpec other = from_text("parameters:\n  drivers.crank.speed_rpm: {values: [2000]}\n");
+  EXPECT_THROW(StudyDb((dir / "study.db").string(), other, 1), std::invalid_argument);
+  fs::remove_all(dir);
+}
+
+TEST(Bifurcation, TheLogisticMapDoublesItsPeriodAtTheKnownParameters) {
+  // x ← r x (1 − x): period 1 up to r = 3, period 2 up to 1 + √6 = 3.4495, period 4 up to
+  // 3.5441 (May, Nature 261, 1976), chaos beyond the accumulation point 3.5699.
+  std::vector<BifurcationColumn> columns;
+  for (double r = 2.8; r < 3.58; r += 0.005) {
+    BifurcationColumn c{r, {}};
+    double x = 0.3;
+    for (int i = 0; i < 20000; ++i) x = r * x * (1 - x);  // transient
+    for (int i = 0; i < 64; ++i) c.points.push_back(x = r * x * (1 - x));
+    columns.push_back(c);
+  }
+  const auto changes = period_changes(columns, 1e-4);
+  std::vector<PeriodChange> doublings;
+  for (const auto& c : changes)
+    if (c.doubling()) doublings.push_back(c);
+  ASSERT_GE(doublings.size(), 3u);
+  // Near a doubling the orbit converges slowly; the tolerance absorbs the columns next to it.
+  EXPECT_EQ(doublings[0].from_period, 1);
+  EXPECT_NEAR(doublings[0].to_parameter, 3.0, 0.011);
+  EXPECT_EQ(doublings[1].from_period, 2);
+  EXPECT_NEAR(doublings[1].to_parameter, 1 + std::sqrt(6.0), 0.011);
+  EXPECT_EQ(doublings[2].from_period, 4);
+  EXPECT_NEAR(doublings[2].to_parameter, 3.5441, 0.011);
+  // Past the accumulation point: no period this diagram can name.
+  EXPECT_EQ(column_period(columns.back().points, 1e-4), 0);
+}
+
+TEST(SweepCli, AKilledStudyResumesWithEveryRunExactlyOnce) {
+  const fs::path dir = temp_dir("resume");
+  const fs::path study = write_study(
+      dir, "set: {solver.end_time: 0.08, solver.output_interval: 1.0e-4}\n"
+           "parameters:\n  drivers.crank.speed_rpm: {from: 3000, to: 5000, count: 16}\n"
+           "transient: {periods: 2}\nkeep: {sections: [rod_slider.ex], channels: [rod_slider.Fn]}\n");
+  const fs::path out = dir / "out";
+  // The whole study once without interruption, for reference.
+  Result r = lash_cmd("sweep " + study.string() + " -q -j 2 -o " + (dir / "ref").string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  // kill -9 once some runs are recorded.
+  const pid_t pid = fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    const int null = ::open("/dev/null", O_WRONLY);
+    dup2(null, 1), dup2(null, 2);
+    execl(LASH_BINARY, LASH_BINARY, "sweep", study.c_str(), "-q", "-j", "1", "-o", out.c_str(),
+          static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  for (int i = 0; i < 1000; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    if (!fs::exists(out / "study.db")) continue;
+    const auto n = query(out / "study.db", "select count(*) from runs");
+    if (!n.empty() && std::stoi(n[0]) >= 3) break;
+  }
+  kill(pid, SIGKILL);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  ASSERT_TRUE(WIFSIGNALED(status)) << "the study ended before the kill";
+  const auto partial = query(out / "study.db", "select count(*) from runs");
+  ASSERT_EQ(partial.size(), 1u);
+  const int kept = std::stoi(partial[0]);
+  EXPECT_GE(kept, 3);
+  ASSERT_LT(kept, 16) << "the study ended before the kill; make its runs longer";
+  // Without --resume the folder is refused; with it only the missing runs run.
+  r = lash_cmd("sweep " + study.string() + " -q -o " + out.string());
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("add --resume"), std::string::npos) << r.out;
+  r = lash_cmd("sweep " + study.string() + " -j 2 --resume -o " + out.string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find(std::to_string(kept) + " of 16 runs already in"), std::string::npos) << r.out;
+  EXPECT_EQ(query(out / "study.db", "select count(*), count(distinct run), min(run), max(run) from runs")[0],
+            "16|16|0|15");
+  // The resumed study holds what the uninterrupted one holds (timing aside).
+  const std::string cols = "select run, \"drivers.crank.speed_rpm\", status, verdict, t_reached, steps from runs order by run";
+  EXPECT_EQ(query(out / "study.db", cols), query(dir / "ref" / "study.db", cols));
+  const std::string m = "select run, name, value from metrics order by run, name";
+  EXPECT_EQ(query(out / "study.db", m), query(dir / "ref" / "study.db", m));
+  EXPECT_EQ(query(out / "study.db", "select * from sections order by run, k"),
+            query(dir / "ref" / "study.db", "select * from sections order by run, k"));
+  // runs.csv: a header and 16 rows.
+  std::ifstream csv(out / "runs.csv");
+  int lines = 0;
+  for (std::string l; std::getline(csv, l);) ++lines;
+  EXPECT_EQ(lines, 17);
+  // An edited study file into the same folder: refused.
+  std::ofstream(study, std::ios::app) << "# edited\n";
+  r = lash_cmd("sweep " + study.string() + " -q --resume -o " + out.string());
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("holds the results of another study file"), std::string::npos) << r.out;
+  fs::remove_all(dir);
+}
+
+TEST(SweepCli, AFailingRunIsRecordedAndTheRestComplete) {
+  const fs::path dir = temp_dir("failing");
+  // A negative clearance in the second run is a model error of that run only; the third one's
+  // integrator gives up (max_steps) and is recorded as failed.
+  const fs::path study = write_study(
+      dir, "set: {solver.end_time: 0.03}\n"
+           "combine: zip\n"
+           "parameters:\n"
+           "  joints.rod_slider.clearance: {values: [2.0e-4, -1.0e-4, 2.0e-4, 3.0e-4]}\n"
+           "  solver.max_steps: {values: [1000000, 1000000, 50, 1000000]}\n"
+           "transient: {periods: 1}\n");
+  Result r = lash_cmd("sweep " + study.string() + " -o " + (dir / "out").string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("4 runs in"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("(2 failed)"), std::string::npos) << r.out;
+  const auto rows = query(dir / "out" / "study.db", "select run, status from runs order by run");
+  EXPECT_EQ(rows, (std::vector<std::string>{"0|completed", "1|error", "2|failed", "3|completed"}));
+  const auto msg = query(dir / "out" / "study.db", "select message from runs where run = 1");
+  EXPECT_NE(msg[0].find("clearance"), std::string::npos) << msg[0];
+  // The study's report names the failed runs with their errors.
+  r = lash_cmd("report " + (dir / "out").string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  const std::string html = lash::test::read_file((dir / "out" / "study_report.html").string());
+  EXPECT_NE(html.find("<h2>Failed runs</h2><table>"), std::string::npos);
+  EXPECT_NE(html.find("<svg"), std::string::npos);
+  EXPECT_NE(html.find("rod_slider.Fn.peak"), std::string::npos);
+  fs::remove_all(dir);
+}
+
+TEST(SweepCli, AStudyThatCannotRunIsRefusedWithItsLocation) {
+  const fs::path dir = temp_dir("refused");
+  const fs::path study = write_study(dir, "parameters:\n  drivers.crank.speed_rpm: {values: [1000]}\ncombine: crossed\n");
+  const Result r = lash_cmd("sweep " + study.string() + " -o " + (dir / "out").string());
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find(study.string() + ":5:10: combine: expected cross"), std::string::npos) << r.out;
+  EXPECT_FALSE(fs::exists(dir / "out" / "study.db"));
+  fs::remove_all(dir);
+}
