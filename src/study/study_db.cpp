@@ -79,10 +79,14 @@ std::string csv_field(const std::string& s) {
   return q + "\"";
 }
 
+/// The shortest text that reads back to the same double ("" for NaN: an empty CSV field).
 std::string csv_number(double v) {
-  if (!std::isfinite(v)) return "";
+  if (!std::isfinite(v)) return std::isnan(v) ? "" : (v > 0 ? "inf" : "-inf");
   char buf[32];
-  std::snprintf(buf, sizeof buf, "%.17g", v);
+  for (int p = 1; p <= 17; ++p) {
+    std::snprintf(buf, sizeof buf, "%.*g", p, v);
+    if (std::strtod(buf, nullptr) == v) break;
+  }
   return buf;
 }
 

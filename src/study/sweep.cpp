@@ -154,8 +154,14 @@ void read_parameter(Reader& r, const YAML::Node& key, const YAML::Node& v, Study
     }
     for (long i = 0; i < n; ++i) {
       const double f = n == 1 ? 0.0 : static_cast<double>(i) / (n - 1);
-      const double x = p.log ? std::exp(std::log(a) + f * (std::log(b) - std::log(a))) : a + f * (b - a);
-      const double xv = i == n - 1 && n > 1 ? b : x;  // the end point exactly as written
+      // (a·(n−1−i) + b·i)/(n−1): 0.05e-3 to 0.5e-3 in 10 steps gives 1e-4, not 9.9999999999999991e-05.
+      const double x = p.log ? std::exp(std::log(a) + f * (std::log(b) - std::log(a)))
+                             : n == 1 ? a : (a * (n - 1 - i) + b * i) / (n - 1);
+      // Rounded to 15 significant digits, the levels are the decimal numbers meant (1e-4, not
+      // 9.999999999999999e-05); the end point exactly as written.
+      char buf[32];
+      std::snprintf(buf, sizeof buf, "%.15g", x);
+      const double xv = i == n - 1 && n > 1 ? b : std::strtod(buf, nullptr);
       p.numbers.push_back(xv);
       p.values.push_back(number_text(xv));
     }
