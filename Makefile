@@ -3,7 +3,7 @@ BUILD      ?= build
 JOBS       ?= $(shell nproc)
 CMAKE_ARGS ?=
 
-.PHONY: deps build demo test test-sanitize test-tsan fuzz bench clean
+.PHONY: deps build demo test test-sanitize test-tsan fuzz bench studies clean
 
 deps:
 	@bash scripts/install-deps.sh
@@ -42,6 +42,13 @@ test-tsan: deps
 
 bench: build
 	$(BUILD)/bench/bench_flores
+
+# The studies of studies/ (minutes each on two cores) into out/, with their reports.
+studies: build
+	for s in studies/*.yaml; do \
+	  n=$$(basename $$s .yaml); \
+	  $(BUILD)/lash sweep $$s -o out/$$n --resume && $(BUILD)/lash report out/$$n || exit 1; \
+	done
 
 clean:
 	rm -rf $(BUILD) build-sanitize build-tsan build-fuzz out
