@@ -174,7 +174,12 @@ TEST(StudyFile, ProblemsAreLocatedInTheStudyFile) {
                 .find("unknown key 'scal', did you mean 'scale'?"),
             std::string::npos);
   const std::string typo = problems("parameters:\n  drivers.crank.sped_rpm: {values: [1000]}\n");
-  EXPECT_NE(typo.find("in run 0 of s.yaml"), std::string::npos) << typo;
+  EXPECT_NE(typo.find("driver 'crank': unknown key 'sped_rpm', did you mean 'speed_rpm'? (value set with --set)"),
+            std::string::npos) << typo;
+  const std::string parent = problems("parameters:\n  drivers.crank2.speed_rpm: {values: [1000]}\n");
+  EXPECT_NE(parent.find("s.yaml:4:3: 'drivers.crank2.speed_rpm': no 'drivers.crank2' in the model, did you mean 'crank'? (in run 0)"),
+            std::string::npos) << parent;
+  EXPECT_NE(typo.find("(in run 0)"), std::string::npos) << typo;
   const std::string channel =
       problems("parameters:\n  drivers.crank.speed_rpm: {values: [1000]}\nkeep: {channels: [slider.axx]}\n");
   EXPECT_NE(channel.find("no channel 'slider.axx' in the model, did you mean 'slider.ax'?"), std::string::npos)
@@ -187,6 +192,12 @@ TEST(StudyFile, ProblemsAreLocatedInTheStudyFile) {
                 .find("zip needs the same number of levels"),
             std::string::npos);
   EXPECT_NE(problems("parameters:\n  drivers.crank.speed_rpm: {min: 1, max: 2}\n").find("add sampling"),
+            std::string::npos);
+  // Parameters are database columns: no duplicates, none named like a run's own columns.
+  EXPECT_NE(problems("parameters:\n  status: {cases: {a: {}, b: {}}}\n").find("s.yaml:4:3: parameter 'status': a name every run's row has"),
+            std::string::npos) << problems("parameters:\n  status: {cases: {a: {}, b: {}}}\n");
+  EXPECT_NE(problems("parameters:\n  drivers.crank.speed_rpm: {values: [1]}\n  Drivers.crank.speed_rpm: {values: [2]}\n")
+                .find("given twice"),
             std::string::npos);
 }
 

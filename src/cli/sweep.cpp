@@ -231,6 +231,9 @@ int SweepCommand::run(std::atomic<int>& interrupt, const std::function<void()>& 
     runs = study_runs(spec);
   } catch (const ModelError& e) {
     code = study_error(e);
+  } catch (const std::exception& e) {  // a structure the reader did not foresee
+    std::cerr << study_ << ": cannot read the study: " << e.what() << "\n";
+    code = kExitBadInput;
   }
   if (code < 0) code = open_folder(spec, runs, out, resume_, folder);
   if (code < 0) {

@@ -83,6 +83,10 @@ std::string csv_field(const std::string& s) {
 std::string csv_number(double v) {
   if (!std::isfinite(v)) return std::isnan(v) ? "" : (v > 0 ? "inf" : "-inf");
   char buf[32];
+  if (v == std::floor(v) && std::abs(v) < 1e15) {  // 1000, not 1e+03
+    std::snprintf(buf, sizeof buf, "%.0f", v);
+    return buf;
+  }
   for (int p = 1; p <= 17; ++p) {
     std::snprintf(buf, sizeof buf, "%.*g", p, v);
     if (std::strtod(buf, nullptr) == v) break;

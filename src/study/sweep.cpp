@@ -268,6 +268,25 @@ StudySpec load_study_text(const std::string& text, const std::string& file,
     throw ModelError(r.list);
   }
   for (const auto& kv : params) read_parameter(r, kv.first, kv.second, spec, read);
+  // Parameters are columns of the study database: no two alike (SQL names ignore case) and none
+  // named like the columns every run has.
+  {
+    auto lower = [](std::string t) {
+      for (char& c : t) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+      return t;
+    };
+    std::set<std::string> seen = {"run", "status", "message", "verdict", "t_reached", "wall_seconds",
+                                   "steps", "rhs_evaluations", "events", "worker", "finished"};
+    const std::set<std::string> reserved = seen;
+    for (const auto& kv : params) {
+      const std::string n = kv.first.as<std::string>("");
+      if (n.empty()) r.error(kv.first, "parameters: an empty name");
+      else if (!seen.insert(lower(n)).second)
+        r.error(kv.first, "parameter '" + n + "': " +
+                              (reserved.count(lower(n)) ? "a name every run's row has already; call it otherwise"
+                                                        : "given twice (names are compared ignoring case)"));
+    }
+  }
   if (const YAML::Node c = root["combine"]) {
     spec.combine = c.as<std::string>("");
     if (spec.combine != "cross" && spec.combine != "zip")
@@ -275,7 +294,9 @@ StudySpec load_study_text(const std::string& text, const std::string& file,
   }
   const bool any_sampled = std::any_of(spec.parameters.begin(), spec.parameters.end(),
                                        [](const StudyParameter& p) { return p.sampled; });
-  if (const YAML::Node s = root["sampling"]) {
+  if (const YAML::Node s = root["sampling"]; s && !s.IsMap()) {
+    r.error(s, "sampling: expected {method: latin_hypercube | random, count: N, seed: S}");
+  } else if (s) {
     r.keys(s, {"method", "count", "seed"}, "sampling");
     spec.sampling = s["method"] ? s["method"].as<std::string>("") : "latin_hypercube";
     if (spec.sampling != "random" && spec.sampling != "latin_hypercube")
@@ -300,11 +321,15 @@ StudySpec load_study_text(const std::string& text, const std::string& file,
                             spec.parameters.front().name + "' has " +
                             std::to_string(spec.parameters.front().values.size()) + ")");
   }
-  if (const YAML::Node k = root["keep"]) {
+  if (const YAML::Node k = root["keep"]; k && !k.IsMap()) {
+    r.error(k, "keep: expected {channels: [...], sections: [...], series: {channels: [...], points: N}}");
+  } else if (k) {
     r.keys(k, {"channels", "sections", "series"}, "keep");
     if (k["channels"]) spec.channels = r.names(k["channels"], "keep: channels");
     if (k["sections"]) spec.section_channels = r.names(k["sections"], "keep: sections");
-    if (const YAML::Node s = k["series"]) {
+    if (const YAML::Node s = k["series"]; s && !s.IsMap()) {
+      r.error(s, "keep: series: expected {channels: [...], points: N}");
+    } else if (s) {
       r.keys(s, {"channels", "points"}, "keep: series");
       if (s["channels"]) spec.series = r.names(s["channels"], "keep: series: channels");
       long n = 0;
@@ -312,7 +337,9 @@ StudySpec load_study_text(const std::string& text, const std::string& file,
         spec.series_points = static_cast<int>(n);
     }
   }
-  if (const YAML::Node t = root["transient"]) {
+  if (const YAML::Node t = root["transient"]; t && !t.IsMap()) {
+    r.error(t, "transient: expected {periods: N} or {time: S}");
+  } else if (t) {
     r.keys(t, {"periods", "time"}, "transient");
     long n = 0;
     if (t["periods"] && r.integer(t["periods"], "transient: periods", 0, 1000000, n))
@@ -344,6 +371,17 @@ StudySpec load_study_text(const std::string& text, const std::string& file,
   // a path fails now rather than in every run (a value that is bad in some runs only is recorded
   // as that run's error). The channels it keeps must exist in that model.
   const auto runs = study_runs(spec);
+  std::map<std::string, YAML::Mark> override_marks;  // override path → its key in the study file
+  if (const YAML::Node set = root["set"]; set && set.IsMap())
+    for (const auto& kv : set) override_marks.emplace(kv.first.as<std::string>(""), kv.first.Mark());
+  for (const auto& kv : params) {
+    override_marks.emplace(kv.first.as<std::string>(""), kv.first.Mark());
+    const YAML::Node cases = kv.second.IsMap() ? kv.second["cases"] : YAML::Node();
+    if (cases && cases.IsMap())
+      for (const auto& c : cases)
+        if (c.second.IsMap())
+          for (const auto& o : c.second) override_marks.emplace(o.first.as<std::string>(""), o.first.Mark());
+  }
   std::optional<ModelError> first_error;
   std::optional<LoadedModel> lm;
   for (size_t i = 0; i < runs.size() && i < 100 && !lm; ++i) {
@@ -353,7 +391,16 @@ StudySpec load_study_text(const std::string& text, const std::string& file,
       if (!first_error) {
         Diagnostics list;
         for (auto d : e.diagnostics()) {
-          d.message = "in run " + std::to_string(runs[i].index) + " of " + file + ": " + d.message;
+          // An override's problem points at the key that set it in the study file.
+          if (d.file.rfind("--set ", 0) == 0) {
+            const std::string path = d.file.substr(6);
+            d.file = file;
+            d.line = d.column = 0;
+            if (const auto m = override_marks.find(path); m != override_marks.end())
+              d.line = m->second.line + 1, d.column = m->second.column + 1;
+            d.message = "'" + path + "': " + d.message;
+          }
+          d.message += " (in run " + std::to_string(runs[i].index) + ")";
           list.push_back(d);
         }
         first_error = ModelError(list);
@@ -380,7 +427,9 @@ StudySpec load_study_file(const std::string& file) {
   try {
     text = read_input_file(file, kMaxModelFileBytes);
   } catch (const std::exception& e) {
-    throw ModelError({{file, 0, 0, "", std::string("cannot read the study file: ") + e.what()}});
+    std::string what = e.what();
+    if (what.rfind(file + ": ", 0) == 0) what.erase(0, file.size() + 2);
+    throw ModelError({{file, 0, 0, "", "cannot read the study file: " + what}});
   }
   return load_study_text(text, file, [](const std::string& path) {
     return read_input_file(path, kMaxModelFileBytes);
