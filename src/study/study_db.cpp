@@ -119,6 +119,7 @@ StudyDb::StudyDb(const std::string& path, const StudySpec& spec, int total_runs)
   }
   sqlite3_busy_timeout(db_, 10000);
   try {
+    exec("PRAGMA journal_mode=WAL");  // one fsync per commit, readers never blocked
     exec("PRAGMA synchronous=FULL");
     bool fresh = true;
     {
