@@ -79,6 +79,29 @@ std::vector<std::string> query(const fs::path& db, const std::string& sql) {
   return rows;
 }
 
+/// Starts `lash sweep STUDY -q -j 1 -o OUT` (output to /dev/null), returns its process id.
+pid_t spawn_sweep(const fs::path& study, const fs::path& out) {
+  const pid_t pid = fork();
+  if (pid == 0) {
+    const int null = ::open("/dev/null", O_WRONLY);
+    dup2(null, 1), dup2(null, 2);
+    execl(LASH_BINARY, LASH_BINARY, "sweep", study.c_str(), "-q", "-j", "1", "-o", out.c_str(),
+          static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  return pid;
+}
+
+/// Waits (up to 20 s) until the study database at `db` holds `n` runs.
+void wait_for_runs(const fs::path& db, int n) {
+  for (int i = 0; i < 1000; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    if (!fs::exists(db)) continue;
+    const auto rows = query(db, "select count(*) from runs");
+    if (!rows.empty() && std::stoi(rows[0]) >= n) return;
+  }
+}
+
 }  // namespace
 
 TEST(StudyFile, CrossZipRangesAndCases) {
@@ -299,21 +322,8 @@ TEST(SweepCli, AKilledStudyResumesWithEveryRunExactlyOnce) {
   Result r = lash_cmd("sweep " + study.string() + " -q -j 2 -o " + (dir / "ref").string());
   ASSERT_EQ(r.code, 0) << r.out;
   // kill -9 once some runs are recorded.
-  const pid_t pid = fork();
-  ASSERT_GE(pid, 0);
-  if (pid == 0) {
-    const int null = ::open("/dev/null", O_WRONLY);
-    dup2(null, 1), dup2(null, 2);
-    execl(LASH_BINARY, LASH_BINARY, "sweep", study.c_str(), "-q", "-j", "1", "-o", out.c_str(),
-          static_cast<char*>(nullptr));
-    _exit(127);
-  }
-  for (int i = 0; i < 1000; ++i) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    if (!fs::exists(out / "study.db")) continue;
-    const auto n = query(out / "study.db", "select count(*) from runs");
-    if (!n.empty() && std::stoi(n[0]) >= 3) break;
-  }
+  const pid_t pid = spawn_sweep(study, out);
+  wait_for_runs(out / "study.db", 3);
   kill(pid, SIGKILL);
   int status = 0;
   waitpid(pid, &status, 0);
@@ -349,6 +359,33 @@ TEST(SweepCli, AKilledStudyResumesWithEveryRunExactlyOnce) {
   r = lash_cmd("sweep " + study.string() + " -q --resume -o " + out.string());
   EXPECT_EQ(r.code, 2) << r.out;
   EXPECT_NE(r.out.find("holds the results of another study file"), std::string::npos) << r.out;
+  fs::remove_all(dir);
+}
+
+TEST(SweepCli, ASignalStopsTheStudyKeepingItsFinishedRuns) {
+  const fs::path dir = temp_dir("signal");
+  const fs::path study = write_study(
+      dir, "set: {solver.end_time: 0.08, solver.output_interval: 1.0e-4}\n"
+           "parameters:\n  drivers.crank.speed_rpm: {from: 3000, to: 5000, count: 16}\n"
+           "transient: {periods: 2}\n");
+  const fs::path out = dir / "out";
+  const pid_t pid = spawn_sweep(study, out);
+  wait_for_runs(out / "study.db", 2);
+  kill(pid, SIGTERM);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 130);
+  const int kept = std::stoi(query(out / "study.db", "select count(*) from runs")[0]);
+  EXPECT_GE(kept, 2);
+  EXPECT_LT(kept, 16);
+  // Every recorded run is whole (none cut by the signal), and runs.csv lists exactly them.
+  EXPECT_EQ(query(out / "study.db", "select count(*) from runs where status = 'completed' and t_reached = 0.08")[0],
+            std::to_string(kept));
+  std::ifstream csv(out / "runs.csv");
+  int lines = 0;
+  for (std::string l; std::getline(csv, l);) ++lines;
+  EXPECT_EQ(lines, kept + 1);
   fs::remove_all(dir);
 }
 
