@@ -370,7 +370,8 @@ YAML::Node to_yaml(const py::handle& h) {
     if (scalars) n.SetStyle(YAML::EmitterStyle::Flow);  // positions: [0.1, 0]
     return n;
   }
-  if (py::hasattr(h, "__float__")) return YAML::Node(py::repr(py::float_(h)).cast<std::string>());
+  if (py::hasattr(h, "__float__"))  // NumPy scalars
+    return YAML::Node(py::repr(py::float_(py::reinterpret_borrow<py::object>(h))).cast<std::string>());
   throw py::type_error("cannot write a " + py::str(h.get_type()).cast<std::string>() +
                        " into a model file");
 }
@@ -424,7 +425,8 @@ PYBIND11_MODULE(_lash, m) {
       py::list diagnostics;
       for (const auto& d : e.diagnostics())
         diagnostics.append(py::make_tuple(d.file, d.line, d.column, d.element, d.message));
-      py::object instance = model_error(py::str(e.what()));
+      py::object type = py::reinterpret_borrow<py::object>(model_error.ptr());
+      py::object instance = type(py::str(e.what()));
       instance.attr("diagnostics") = diagnostics;
       PyErr_SetObject(model_error.ptr(), instance.ptr());
     } catch (const lash::IoError& e) {
