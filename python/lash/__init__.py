@@ -27,6 +27,12 @@ import numpy as np
 from . import _lash
 from ._lash import IoError, ModelError
 
+ModelError.__module__ = IoError.__module__ = "lash"
+ModelError.__doc__ = """A bad model file or override (a ValueError), raised by load, Model.check and
+simulate. str() lists every problem as the CLI does, `file:line:column: element: message`
+(line 0 for an override); `.diagnostics` holds them as (file, line, column, element, message)."""
+IoError.__doc__ = """A file Lash could not read or write (an OSError), with the path and the reason."""
+
 __all__ = ["Model", "Result", "ModelError", "IoError", "load", "loads", "simulate", "analysis"]
 __version__ = "0.1.0"
 
