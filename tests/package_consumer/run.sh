@@ -30,4 +30,14 @@ cmake --build "$work/consumer" >/dev/null
     --set solver.end_time=0.012 >/dev/null
 ls "$work"/run/figures/*.png >/dev/null || \
   { echo "the installed lash wrote no figures:" >&2; cat "$work/run/figures.log" >&2 || true; exit 1; }
+# The Python package, when built, imports from the installed tree (no build folder on the path).
+for site in "$prefix"/lib/python3*/dist-packages; do
+  [ -f "$site/lash/__init__.py" ] || continue
+  (cd "$work" && PYTHONPATH="$site" /usr/bin/python3 -c "
+import lash, sys
+assert lash.__file__.startswith(sys.argv[1]), lash.__file__
+r = lash.simulate(sys.argv[2], t_end=0.001)
+assert r.ok and len(r.time) == 101, r
+print('installed python module: OK')" "$site" "$source/examples/flores_slider_crank.yaml")
+done
 echo "package consumer: OK"
