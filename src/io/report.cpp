@@ -106,8 +106,9 @@ json lyapunov_json(const std::optional<LyapunovEstimate>& l) {
 
 /// The figures tool, found relative to the installed files rather than a path built in: at
 /// ../share/lash/lash_figures.py from the file holding this code (liblash.so, or the program
-/// linked with the static libraries) or from the running program (/proc/self/exe). The build
-/// tree has the same layout (build/share/lash/, copied at configure time). "" if none exists.
+/// linked with the static libraries) or from the running program (/proc/self/exe); in the build
+/// tree, build/share/lash/ (copied at configure time) serves build/lash (share/ beside it) and
+/// the test programs in build/tests/ (../share). "" if none exists.
 std::string figures_script() {
   namespace fs = std::filesystem;
   std::vector<fs::path> binaries;
@@ -118,10 +119,13 @@ std::string figures_script() {
   binaries.emplace_back("/proc/self/exe");
   for (const auto& b : binaries) {
     std::error_code ec;
-    const fs::path real = fs::canonical(b, ec);
+    const fs::path dir = fs::canonical(b, ec).parent_path();
     if (ec) continue;
-    const fs::path script = real.parent_path().parent_path() / "share" / "lash" / "lash_figures.py";
-    if (fs::is_regular_file(script, ec)) return script.string();
+    // P/bin/lash or build/tests/test_x: ../share; build/lash (the build tree's top): share.
+    for (const fs::path& share : {dir.parent_path() / "share", dir / "share"}) {
+      const fs::path script = share / "lash" / "lash_figures.py";
+      if (fs::is_regular_file(script, ec)) return script.string();
+    }
   }
   return {};
 }
