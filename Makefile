@@ -3,7 +3,7 @@ BUILD      ?= build
 JOBS       ?= $(shell nproc)
 CMAKE_ARGS ?=
 
-.PHONY: deps build demo test test-sanitize test-tsan fuzz bench studies clean
+.PHONY: deps build python install demo test test-sanitize test-tsan fuzz bench studies clean
 
 deps:
 	@bash scripts/install-deps.sh
@@ -11,6 +11,17 @@ deps:
 build: deps
 	@cmake -S . -B $(BUILD) -G Ninja -DCMAKE_BUILD_TYPE=Release $(CMAKE_ARGS) >/dev/null
 	@cmake --build $(BUILD) -j $(JOBS)
+
+# The Python module alone: build/python/lash (PYTHONPATH=build/python /usr/bin/python3).
+python: deps
+	@cmake -S . -B $(BUILD) -G Ninja -DCMAKE_BUILD_TYPE=Release $(CMAKE_ARGS) >/dev/null
+	@cmake --build $(BUILD) -j $(JOBS) --target lash_python
+
+# Installs the lash command, the C++ package and the Python module under PREFIX (default
+# /usr/local, whose lib/python3.X/dist-packages Debian's /usr/bin/python3 reads).
+PREFIX ?= /usr/local
+install: build
+	cmake --install $(BUILD) --prefix $(PREFIX)
 
 demo: build
 	$(BUILD)/lash run examples/flores_slider_crank.yaml -o out/flores_slider_crank --report

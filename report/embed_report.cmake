@@ -3,14 +3,19 @@
 #         -DOUT_CPP=<file> -P embed_report.cmake
 # 1. template.html with uPlot's CSS and JS, report.css and report.js inlined in place of their
 #    @@LASH_*@@ tokens -> OUT_HTML (the template, still holding __LASH_REPORT_DATA__ once);
+#    With -DPREBUILT_HTML=<report_template.generated.html> (no uPlot from npm at hand), that
+#    committed page is OUT_HTML instead and step 1 is skipped;
 # 2. OUT_HTML as a byte array behind lash::report_html_template() -> OUT_CPP. A byte array, not a
 #    raw string literal: no delimiter can clash with the page, and no compiler's literal limit applies.
 cmake_minimum_required(VERSION 3.22)
-foreach(var REPORT_DIR UPLOT_DIR OUT_HTML OUT_CPP)
+foreach(var REPORT_DIR OUT_HTML OUT_CPP)
   if(NOT DEFINED ${var})
     message(FATAL_ERROR "embed_report.cmake: -D${var}=... is required")
   endif()
 endforeach()
+if(DEFINED PREBUILT_HTML)
+  file(READ "${PREBUILT_HTML}" html)
+else()
 
 file(READ "${REPORT_DIR}/template.html" html)
 set(tokens  LASH_UPLOT_CSS LASH_REPORT_CSS LASH_UPLOT_JS LASH_REPORT_JS)
@@ -35,6 +40,7 @@ foreach(token src IN ZIP_LISTS tokens sources)
   endif()
   string(REPLACE "@@${token}@@" "${text}" html "${html}")
 endforeach()
+endif()
 string(FIND "${html}" "__LASH_REPORT_DATA__" first)
 string(FIND "${html}" "__LASH_REPORT_DATA__" last REVERSE)
 if(first EQUAL -1 OR NOT first EQUAL last)

@@ -7,6 +7,7 @@ pkgs=(cmake ninja-build g++ make pkg-config
       libsundials-dev nlohmann-json3-dev libgtest-dev libgmock-dev libbenchmark-dev libfftw3-dev
       python3-matplotlib python3-numpy
       libsqlite3-dev libopenmpi-dev openmpi-bin
+      pybind11-dev python3-dev python3-pytest python3-pandas
       clang libclang-rt-14-dev
       chromium fonts-dejavu-core)
 missing=()

@@ -1,5 +1,7 @@
 #include "io/report.hpp"
 
+#include <dlfcn.h>
+
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -100,6 +102,32 @@ json lyapunov_json(const std::optional<LyapunovEstimate>& l) {
           {"unit", "1/s"}, {"renormalisations", l->renormalisations},
           {"interval", l->interval}, {"d0", l->d0}, {"history", hist},
           {"message", l->message}};
+}
+
+/// The figures tool, found relative to the installed files rather than a path built in: at
+/// ../share/lash/lash_figures.py from the file holding this code (liblash.so, or the program
+/// linked with the static libraries) or from the running program (/proc/self/exe); in the build
+/// tree, build/share/lash/ (copied at configure time) serves build/lash (share/ beside it) and
+/// the test programs in build/tests/ (../share). "" if none exists.
+std::string figures_script() {
+  namespace fs = std::filesystem;
+  std::vector<fs::path> binaries;
+  Dl_info info{};
+  if (dladdr(reinterpret_cast<void*>(&figures_script), &info) != 0 && info.dli_fname &&
+      info.dli_fname[0] == '/')
+    binaries.emplace_back(info.dli_fname);
+  binaries.emplace_back("/proc/self/exe");
+  for (const auto& b : binaries) {
+    std::error_code ec;
+    const fs::path dir = fs::canonical(b, ec).parent_path();
+    if (ec) continue;
+    // P/bin/lash or build/tests/test_x: ../share; build/lash (the build tree's top): share.
+    for (const fs::path& share : {dir.parent_path() / "share", dir / "share"}) {
+      const fs::path script = share / "lash" / "lash_figures.py";
+      if (fs::is_regular_file(script, ec)) return script.string();
+    }
+  }
+  return {};
 }
 
 }  // namespace
@@ -260,11 +288,14 @@ std::vector<std::string> write_report(const json& data, const std::string& folde
   notes.push_back("wrote " + folder + "/report.html");
   // Figures for papers, with Debian's matplotlib; started without a shell, so no folder name can
   // run a command, and with an absolute path, so no name is read as an option ("-h").
-  const std::string script = std::string(LASH_SOURCE_DIR) + "/tools/lash_figures.py";
+  const std::string script = figures_script();
   const std::string python = "/usr/bin/python3";
   const std::string figures = folder + "/figures";
-  if (!fs::exists(script) || !fs::exists(python)) {
-    notes.push_back("figures skipped: " + script + " or " + python + " not found");
+  if (script.empty() || !fs::exists(python)) {
+    notes.push_back("figures skipped: " +
+                    (script.empty() ? std::string("share/lash/lash_figures.py (beside the lash "
+                                                  "installation) not found")
+                                    : python + " not found"));
     return notes;
   }
   // An earlier report's figures/ goes (a folder lash did not write stays, and so do they).

@@ -1,0 +1,398 @@
+"""Lash from Python: planar mechanisms with clearance joints.
+
+    import lash
+    model = lash.load("examples/flores_slider_crank.yaml")
+    model.set("joints.rod_slider.clearance", 0.25e-3)
+    result = lash.simulate(model, t_end=0.024)
+    result["slider.ax"]         # NumPy array (a view into the run's output, no copy)
+    result.events               # dict of arrays: time, joint, event, velocity
+    result.summary              # dict: status, channels (peaks), clearance_joints, integrator
+    result.to_pandas()          # a DataFrame, when pandas is installed
+    lash.analysis.analyze(model)                 # verdict, Poincare sections, spectra, ...
+
+Models are model files (docs/model-format.md): `Model` keeps the file's text and the list of
+overrides (the CLI's `--set KEY.PATH=VALUE`), and the C++ loader validates them whenever the
+model is used, so every error reads as the CLI's, `file:line:column: ...`, raised as
+`lash.ModelError`. Models can also be built in code (`Model.new`, `add_body`, `add_joint`,
+`add_clearance_joint`, `add_driver`, ...) and saved with `Model.save`.
+"""
+from __future__ import annotations
+
+import math
+import os
+from typing import Any, Dict, Iterable, List, Optional, Sequence
+
+import numpy as np
+
+from . import _lash
+from ._lash import IoError, ModelError
+
+ModelError.__module__ = IoError.__module__ = "lash"
+ModelError.__doc__ = """A bad model file or override (a ValueError), raised by load, Model.check and
+simulate. str() lists every problem as the CLI does, `file:line:column: element: message`
+(line 0 for an override); `.diagnostics` holds them as (file, line, column, element, message)."""
+IoError.__doc__ = """A file Lash could not read or write (an OSError), with the path and the reason."""
+
+__all__ = ["Model", "Result", "ModelError", "IoError", "load", "loads", "simulate", "analysis"]
+__version__ = "0.1.0"
+
+
+def _yaml_value(value: Any) -> str:
+    """A Python value as the text of an override value (shortest round-trip for floats)."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, (int, float, np.floating, np.integer)):
+        return repr(float(value)) if isinstance(value, (float, np.floating)) else str(int(value))
+    if isinstance(value, str):
+        return value
+    if isinstance(value, (list, tuple, dict)):
+        return _lash.emit_yaml(value).strip()
+    raise TypeError(f"cannot set a {type(value).__name__} as a model value")
+
+
+class Model:
+    """A mechanism: a model file's text (or data built in code) plus overrides.
+
+    Nothing is validated until the model is used (`check`, `simulate`, `channels`, ...); then the
+    C++ loader reads it exactly as `lash run` does and raises `ModelError` with every problem.
+    """
+
+    def __init__(self, text: Optional[str] = None, *, filename: str = "<model>",
+                 data: Optional[dict] = None, overrides: Sequence[str] = ()) -> None:
+        """Use `lash.load(path)`, `lash.loads(text)` or `Model.new(name)` rather than this."""
+        self._text = text
+        self._data = data
+        self.filename = filename
+        self.overrides: List[str] = list(overrides)
+        self._compiled = None
+
+    # --- construction --------------------------------------------------------------------
+    @classmethod
+    def new(cls, name: str, *, gravity: Sequence[float] = (0.0, -9.81)) -> "Model":
+        """An empty model named `name`, to be built with add_body, add_joint, ..."""
+        return cls(data={"name": name, "gravity": list(gravity), "bodies": {}, "joints": {}},
+                   filename=f"<{name}>")
+
+    @property
+    def data(self) -> dict:
+        """The model as Python data (dicts and lists as in the model file, overrides not applied).
+
+        Reading it from a loaded file drops the file's comments from what `save` writes."""
+        if self._data is None:
+            self._data = _lash.parse_yaml(self._text or "") or {}
+            self._text = None
+        self._compiled = None  # the caller may change it
+        return self._data
+
+    def _section(self, key: str) -> dict:
+        section = self.data.setdefault(key, {})
+        if section is None:
+            section = self.data[key] = {}
+        return section
+
+    def _add(self, key: str, name: str, spec: dict) -> "Model":
+        section = self._section(key)
+        if name in section:
+            raise ValueError(f"{key[:-1]} '{name}' exists already")
+        section[name] = {k: v for k, v in spec.items() if v is not None}
+        return self
+
+    def add_ground_marker(self, name: str, position: Sequence[float]) -> "Model":
+        """A named point on the ground, world coordinates in m (`ground.markers`)."""
+        ground = self._section("ground")
+        ground.setdefault("markers", {})[name] = list(position)
+        return self
+
+    def add_body(self, name: str, *, mass: float, inertia: Optional[float] = None,
+                 position: Sequence[float] = (0.0, 0.0), angle: Optional[float] = None,
+                 markers: Optional[Dict[str, Sequence[float]]] = None, **more: Any) -> "Model":
+        """A rigid body (mass kg, inertia kg*m^2 about the centre of mass, position of the centre
+        of mass m, angle rad, markers in body coordinates m); `more` holds any other key of
+        docs/model-format.md (e.g. type="point_mass", velocity=[vx, vy])."""
+        spec = {"mass": mass, "inertia": inertia, "position": list(position), "angle": angle,
+                "markers": {k: list(v) for k, v in (markers or {}).items()} or None}
+        spec.update(more)
+        return self._add("bodies", name, spec)
+
+    def add_joint(self, name: str, type: str = "revolute", **spec: Any) -> "Model":
+        """A joint: type revolute (journal="body.marker", bearing="body.marker"), translational
+        (guide=, slider=, axis=[x, y]), fixed or distance, with the keys of docs/model-format.md."""
+        return self._add("joints", name, {"type": type, **spec})
+
+    def add_clearance_joint(self, name: str, *, journal: str, bearing: str, clearance: float,
+                            **spec: Any) -> "Model":
+        """A revolute joint with radial clearance `clearance` (m) between the journal and the
+        bearing; contact and friction keys (journal_radius, normal_law, restitution, friction,
+        material, ...) as in docs/model-format.md, or from `clearance_defaults`."""
+        return self._add("joints", name, {"type": "revolute", "journal": journal,
+                                          "bearing": bearing, "clearance": clearance, **spec})
+
+    def set_clearance_defaults(self, **spec: Any) -> "Model":
+        """Defaults of every clearance joint (`clearance_defaults`: journal_radius, material, ...)."""
+        self._section("clearance_defaults").update(spec)
+        return self
+
+    def add_driver(self, name: str, **spec: Any) -> "Model":
+        """A driver, e.g. add_driver("crank", joint="crank_pivot", speed_rpm=5000)."""
+        return self._add("drivers", name, spec)
+
+    def add_load(self, name: str, **spec: Any) -> "Model":
+        """A load (force, torque, spring_damper, ...), keys as in docs/model-format.md."""
+        return self._add("loads", name, spec)
+
+    def set_solver(self, **spec: Any) -> "Model":
+        """Solver settings: integrator, rtol, atol, end_time, output_interval, initial_state, ..."""
+        self._section("solver").update(spec)
+        return self
+
+    # --- overrides and the compiled model ------------------------------------------------
+    def set(self, path: str, value: Any) -> "Model":
+        """Changes one value as the CLI's `--set path=value` does, e.g.
+        model.set("joints.rod_slider.clearance", 0.25e-3). Checked when the model is next used;
+        a path that does not exist raises ModelError there."""
+        if "=" in path:
+            raise ValueError(f"path '{path}' contains '='; pass the value separately")
+        self.overrides.append(f"{path}={_yaml_value(value)}")
+        self._compiled = None
+        return self
+
+    def copy(self) -> "Model":
+        """An independent copy (its own overrides and data)."""
+        import copy as _copy
+        return Model(self._text, filename=self.filename, data=_copy.deepcopy(self._data),
+                     overrides=self.overrides)
+
+    def text(self) -> str:
+        """The model file's text, overrides not applied."""
+        return self._text if self._text is not None else _lash.emit_yaml(self._data)
+
+    def compiled(self, extra_overrides: Sequence[str] = ()):
+        """The model loaded and validated by the C++ loader (cached); raises ModelError."""
+        if extra_overrides:
+            return _lash.load_text(self.text(), self.filename, self.overrides + list(extra_overrides))
+        if self._compiled is None:
+            self._compiled = _lash.load_text(self.text(), self.filename, self.overrides)
+        return self._compiled
+
+    def check(self) -> "Model":
+        """Validates the model (as `lash check`); raises ModelError listing every problem."""
+        self.compiled()
+        return self
+
+    @property
+    def name(self) -> str:
+        return self.compiled().name
+
+    @property
+    def channels(self) -> List[str]:
+        """Every output channel `<element>.<quantity>`, in the column order of timeseries.csv."""
+        return [c[0] for c in self.compiled().channels]
+
+    def resolved_yaml(self) -> str:
+        """The model as it runs, overrides applied (what `lash run` writes to model_resolved.yaml)."""
+        return self.compiled().resolved_yaml
+
+    def save(self, path: str) -> None:
+        """Writes the model file: the text as loaded when nothing changed (comments kept), else
+        the model with its overrides applied. Validated first, so no broken file is written."""
+        compiled = self.compiled()
+        text = self._text if (self._text is not None and not self.overrides) else compiled.resolved_yaml
+        with open(path, "w", encoding="utf-8") as f:
+            f.write(text if text.endswith("\n") else text + "\n")
+
+    def __repr__(self) -> str:
+        return f"<lash.Model {self.filename!r}, {len(self.overrides)} overrides>"
+
+
+def load(path: str | os.PathLike, overrides: Iterable[str] = ()) -> Model:
+    """Reads a model file (YAML, docs/model-format.md) and validates it.
+
+    `overrides` are "KEY.PATH=VALUE" strings as for `lash run --set`. Raises ModelError with
+    every problem as `file:line:column: element: message` (also as `.diagnostics`, a list of
+    (file, line, column, element, message)), OSError when the file cannot be read."""
+    path = os.fspath(path)
+    with open(path, encoding="utf-8") as f:
+        text = f.read()
+    model = Model(text, filename=path, overrides=list(overrides))
+    model.check()
+    return model
+
+
+def loads(text: str, filename: str = "<string>", overrides: Iterable[str] = ()) -> Model:
+    """As `load`, from the text of a model file; `filename` is used in messages."""
+    model = Model(text, filename=filename, overrides=list(overrides))
+    model.check()
+    return model
+
+
+class Result:
+    """The outputs of one run, in memory.
+
+    result["slider.ax"]  one channel as a NumPy array (a view of `values`, no copy)
+    result.time          output times, s
+    result.values        every channel, shape (outputs, channels), columns as `channels`
+    result.channels      channel names; `units` and `descriptions` beside them
+    result.events        contact onsets and separations: dict of arrays time, joint, event
+                         ("onset"/"separation"), velocity (m/s)
+    result.summary       dict as summary.json: status, channels (min/max/peak with times),
+                         clearance_joints (impacts, contact share), integrator statistics
+    result.status        dict: outcome (completed, failed, interrupted), ok, time, element, message
+    """
+
+    def __init__(self, model: Model, compiled, raw: dict) -> None:
+        self.model = model
+        self._compiled = compiled
+        self.time: np.ndarray = raw["time"]
+        self.values: np.ndarray = raw["values"]
+        self.channels: List[str] = [c[0] for c in compiled.channels]
+        self.units: Dict[str, str] = {c[0]: c[1] for c in compiled.channels}
+        self.descriptions: Dict[str, str] = {c[0]: c[2] for c in compiled.channels}
+        self._index = {name: i for i, name in enumerate(self.channels)}
+        ev = raw["events"]
+        self.events: Dict[str, Any] = {
+            "time": ev["time"], "joint": np.array(ev["joint"], dtype=object),
+            "event": np.where(ev["onset"], "onset", "separation").astype(object),
+            "velocity": ev["velocity"]}
+        self.status: Dict[str, Any] = raw["status"]
+        self.integrator: Dict[str, Any] = raw["integrator"]
+        self.max_constraint_violation: float = raw["max_constraint_violation"]
+        self.warnings: List[str] = raw["warnings"]
+        self.final_state: Dict[str, Any] = raw["final_state"]
+        self._initial_contact = raw["initial_contact"]
+        self._summary: Optional[dict] = None
+
+    def __getitem__(self, channel: str) -> np.ndarray:
+        """One channel's values at `time` (a view, SI units)."""
+        try:
+            return self.values[:, self._index[channel]]
+        except KeyError:
+            import difflib
+            near = difflib.get_close_matches(channel, self.channels, n=1)
+            hint = f", did you mean '{near[0]}'?" if near else ""
+            raise KeyError(f"no channel '{channel}' in this run{hint}") from None
+
+    def __contains__(self, channel: str) -> bool:
+        return channel in self._index
+
+    def __len__(self) -> int:
+        return len(self.time)
+
+    @property
+    def ok(self) -> bool:
+        """True when the run reached end_time."""
+        return bool(self.status["ok"])
+
+    @property
+    def summary(self) -> Dict[str, Any]:
+        """What `lash run` writes to summary.json, computed from these arrays: status, per
+        channel unit/description/min/t_min/max/t_max/peak, per clearance joint impacts,
+        separations, contact and free-flight shares, max impact velocity, integrator statistics."""
+        if self._summary is None:
+            self._summary = self._make_summary()
+        return self._summary
+
+    def _make_summary(self) -> Dict[str, Any]:
+        channels = {}
+        for i, name in enumerate(self.channels):
+            col = self.values[:, i]
+            if len(col) == 0:
+                continue
+            i_min, i_max = int(np.argmin(col)), int(np.argmax(col))
+            lo, hi = float(col[i_min]), float(col[i_max])
+            channels[name] = {"unit": self.units[name], "description": self.descriptions[name],
+                              "min": lo, "t_min": float(self.time[i_min]), "max": hi,
+                              "t_max": float(self.time[i_max]), "peak": max(abs(lo), abs(hi))}
+        joints = {}
+        t_first = float(self.time[0]) if len(self.time) else 0.0
+        t_last = float(self.time[-1]) if len(self.time) else 0.0
+        span = t_last - t_first
+        for k, joint in enumerate(self._compiled.clearance_joints):
+            mask = self.events["joint"] == joint
+            times, kinds = self.events["time"][mask], self.events["event"][mask]
+            vel = self.events["velocity"][mask]
+            in_contact = bool(self._initial_contact[k]) if k < len(self._initial_contact) else False
+            onset_t, contact = t_first, 0.0
+            for t, kind in zip(times, kinds):
+                if kind == "onset":
+                    in_contact, onset_t = True, t
+                else:
+                    if in_contact:
+                        contact += t - onset_t
+                    in_contact = False
+            if in_contact:
+                contact += t_last - onset_t
+            share = contact / span if span > 0 else 0.0
+            onsets = kinds == "onset"
+            joints[joint] = {"impacts": int(onsets.sum()), "separations": int((~onsets).sum()),
+                             "contact_share": share, "free_flight_share": 1.0 - share,
+                             "max_impact_velocity": float(vel[onsets].max()) if onsets.any() else 0.0}
+        return {"status": dict(self.status), "channels": channels, "clearance_joints": joints,
+                "integrator": dict(self.integrator),
+                "max_constraint_violation": self.max_constraint_violation,
+                "model": {"name": self._compiled.name, "file": self.model.filename,
+                          "overrides": list(self.model.overrides)}}
+
+    def to_pandas(self):
+        """The time series as a pandas DataFrame indexed by time (needs pandas, e.g. Debian's
+        python3-pandas); raises ImportError without it."""
+        try:
+            import pandas as pd
+        except ImportError as e:
+            raise ImportError("Result.to_pandas needs pandas (apt-get install python3-pandas)") from e
+        df = pd.DataFrame(self.values, columns=self.channels, copy=False)
+        df.index = pd.Index(self.time, name="time")
+        return df
+
+    def events_to_pandas(self):
+        """The events as a pandas DataFrame (columns time, joint, event, velocity)."""
+        import pandas as pd
+        return pd.DataFrame(self.events)
+
+    def __repr__(self) -> str:
+        return (f"<lash.Result {self.status['outcome']} at t={self.status['time']:g} s, "
+                f"{len(self.time)} outputs x {len(self.channels)} channels, "
+                f"{len(self.events['time'])} events>")
+
+
+def _as_model(model: Model | str | os.PathLike) -> Model:
+    if isinstance(model, Model):
+        return model
+    if isinstance(model, (str, os.PathLike)):
+        return load(model)
+    raise TypeError(f"expected a lash.Model or a model file path, got {type(model).__name__}")
+
+
+def _run_overrides(t_end: Optional[float], output_interval: Optional[float],
+                   integrator: Optional[str], overrides: Iterable[str]) -> List[str]:
+    extra = list(overrides)
+    if t_end is not None:
+        if not (isinstance(t_end, (int, float)) and math.isfinite(t_end) and t_end > 0):
+            raise ValueError(f"t_end must be a finite time > 0 s, got {t_end!r}")
+        extra.append(f"solver.end_time={_yaml_value(float(t_end))}")
+    if output_interval is not None:
+        extra.append(f"solver.output_interval={_yaml_value(float(output_interval))}")
+    if integrator is not None:
+        extra.append(f"solver.integrator={integrator}")
+    return extra
+
+
+def simulate(model: Model | str | os.PathLike, t_end: Optional[float] = None, *,
+             output_interval: Optional[float] = None, integrator: Optional[str] = None,
+             overrides: Iterable[str] = ()) -> Result:
+    """Runs `model` from t = 0 to `t_end` (s; default the model's solver.end_time) and returns
+    its outputs in memory as a `Result`, the same numbers `lash run` writes to timeseries.csv.
+
+    output_interval (s) and integrator ("dopri5" or "bdf") override the model's solver
+    settings, `overrides` are more "KEY.PATH=VALUE" strings; `model` itself is not changed.
+    The GIL is released while the engine runs. Ctrl-C (SIGINT) stops the run at its next output
+    and raises KeyboardInterrupt. A numerical failure does not raise: the result holds the run up
+    to the failure and `result.status` says what happened (`result.ok` is False).
+    Raises ModelError for a bad model or override, RuntimeError when no consistent initial state
+    exists."""
+    model = _as_model(model)
+    extra = _run_overrides(t_end, output_interval, integrator, overrides)
+    compiled = model.compiled(extra)
+    return Result(model, compiled, _lash.simulate(compiled))
+
+
+from . import analysis  # noqa: E402  (uses Model and Result above)

@@ -1,0 +1,527 @@
+/// @file lash_module.cpp
+/// The compiled half of the Python package `lash` (module `lash._lash`): the C++ free functions
+/// one to one — load a model (io/model_loader.hpp), simulate it (core/simulate.hpp) with an
+/// in-memory observer, analyse a run (study/run_analysis.hpp) and the model-free analysis
+/// functions (analysis/) — plus YAML emitting and parsing with yaml-cpp for models built in code.
+/// The Python side (python/lash/*.py) wraps these in Model, Result and lash.analysis.
+/// Long calls release the GIL and run on a worker thread while the calling thread polls
+/// PyErr_CheckSignals: Ctrl-C sets RunOptions::interrupt and raises KeyboardInterrupt.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+#include <yaml-cpp/yaml.h>
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <csignal>
+#include <cstdlib>
+#include <memory>
+#include <mutex>
+#include <thread>
+
+#include "analysis/dynamics_analysis.hpp"
+#include "analysis/signal.hpp"
+#include "core/elements/registry.hpp"
+#include "core/simulate.hpp"
+#include "io/diagnostics.hpp"
+#include "io/files.hpp"
+#include "io/model_loader.hpp"
+#include "study/run_analysis.hpp"
+
+namespace py = pybind11;
+
+namespace {
+
+/// A loaded, validated model with the text it was loaded from (after overrides).
+struct CompiledModel {
+  lash::LoadedModel loaded;
+  std::vector<lash::ChannelInfo> channels;
+};
+
+/// A NumPy array that takes over `v` (no copy): the vector lives as long as the array.
+py::array_t<double> to_numpy(std::vector<double>&& v, std::vector<py::ssize_t> shape) {
+  auto* owned = new std::vector<double>(std::move(v));
+  py::capsule free_when_done(owned, [](void* p) { delete static_cast<std::vector<double>*>(p); });
+  return py::array_t<double>(shape, owned->data(), free_when_done);
+}
+py::array_t<double> to_numpy(std::vector<double>&& v) {
+  const auto n = static_cast<py::ssize_t>(v.size());
+  return to_numpy(std::move(v), {n});
+}
+
+/// Runs `work` on a worker thread with the GIL released; the calling thread checks for signals
+/// every 50 ms. On one (Ctrl-C: Python's handler raises KeyboardInterrupt), `interrupt` is set,
+/// the work stops at its next output, and the Python exception is raised once it has.
+template <class R>
+R run_interruptible(const std::function<R()>& work, std::atomic<int>& interrupt) {
+  R result{};
+  std::exception_ptr error;
+  bool done = false, signalled = false;
+  std::mutex m;
+  std::condition_variable cv;
+  {
+    py::gil_scoped_release release;
+    std::thread worker([&] {
+      try {
+        result = work();
+      } catch (...) {
+        error = std::current_exception();
+      }
+      std::lock_guard<std::mutex> lock(m);
+      done = true;
+      cv.notify_all();
+    });
+    std::unique_lock<std::mutex> lock(m);
+    while (!done) {
+      cv.wait_for(lock, std::chrono::milliseconds(50));
+      if (done || signalled) continue;
+      lock.unlock();
+      {
+        py::gil_scoped_acquire gil;
+        // Runs the Python signal handlers (main thread only); -1: one raised, e.g. KeyboardInterrupt.
+        if (PyErr_CheckSignals() != 0) signalled = true;
+      }
+      if (signalled) interrupt.store(SIGINT);
+      lock.lock();
+    }
+    lock.unlock();
+    worker.join();
+  }
+  if (signalled) throw py::error_already_set();  // the exception the handler raised
+  if (error) std::rethrow_exception(error);
+  return result;
+}
+
+/// Gathers a run's outputs and events in memory, in the column order of channel_info.
+class Collector : public lash::Observer {
+ public:
+  Collector(const lash::Model& model, size_t channels, size_t expected)
+      : model_(model), nch_(channels) {
+    time.reserve(expected);
+    values.reserve(expected * channels);
+  }
+  void output(double t, const Eigen::VectorXd& y, const lash::Workspace& ws) override {
+    time.push_back(t);
+    const size_t offset = values.size();
+    values.resize(offset + nch_);
+    lash::channel_values(model_, ws, y, values.data() + offset);
+    if (time.size() == 1)
+      for (int k = 0; k < ws.nc; ++k) initial_contact.push_back(ws.contact[k].in_contact);
+  }
+  void event(const lash::ContactEvent& e, const lash::Workspace&) override {
+    event_time.push_back(e.t);
+    event_joint.push_back(e.clearance);
+    event_onset.push_back(e.onset);
+    event_velocity.push_back(e.velocity);
+  }
+  std::vector<double> time, values, event_time, event_velocity;
+  std::vector<int> event_joint;
+  std::vector<bool> event_onset, initial_contact;
+
+ private:
+  const lash::Model& model_;
+  size_t nch_;
+};
+
+py::dict status_dict(const lash::RunStatus& s) {
+  py::dict d;
+  d["outcome"] = lash::outcome_name(s.outcome);
+  d["ok"] = s.ok;
+  d["time"] = s.t;
+  d["element"] = s.element;
+  d["message"] = s.message;
+  return d;
+}
+
+py::dict run_result_dict(const lash::RunResult& r) {
+  py::dict d;
+  d["status"] = status_dict(r.status);
+  py::dict integ;
+  integ["name"] = r.integrator;
+  integ["steps"] = r.stats.steps;
+  integ["rejected_steps"] = r.stats.rejected_steps;
+  integ["rhs_evaluations"] = r.stats.rhs_evaluations;
+  integ["events"] = r.stats.events;
+  integ["missed_events"] = r.missed_events;
+  integ["wall_seconds"] = r.wall_seconds;
+  integ["outputs"] = r.outputs;
+  d["integrator"] = integ;
+  d["max_constraint_violation"] = r.max_constraint_violation;
+  d["warnings"] = r.warnings;
+  py::dict fs;
+  fs["time"] = r.final_state.t;
+  fs["y"] = std::vector<double>(r.final_state.y.data(),
+                                r.final_state.y.data() + r.final_state.y.size());
+  d["final_state"] = fs;
+  return d;
+}
+
+std::vector<std::string> clearance_joint_names(const lash::Model& m) {
+  std::vector<std::string> names;
+  for (const auto& j : m.joints)
+    if (j.clearance) names.push_back(j.name);
+  return names;
+}
+
+/// lash.simulate's engine: the model's solver settings from t = 0 to end_time.
+py::dict simulate(const CompiledModel& cm) {
+  const lash::Model& model = cm.loaded.model;
+  std::atomic<int> interrupt{0};
+  const double n = model.solver.end_time / model.solver.output_interval;
+  const size_t expected = n > 0 && n < 1e8 ? static_cast<size_t>(n) + 2 : 16;
+  auto collector = std::make_shared<Collector>(model, cm.channels.size(), expected);
+  std::function<lash::RunResult()> work = [&] {
+    lash::Workspace ws(model);
+    lash::RunOptions options;
+    options.interrupt = &interrupt;
+    return lash::simulate(model, ws, *collector, {}, {}, options);
+  };
+  const lash::RunResult r = run_interruptible(work, interrupt);
+  py::dict d = run_result_dict(r);
+  const auto rows = static_cast<py::ssize_t>(collector->time.size());
+  const auto cols = static_cast<py::ssize_t>(cm.channels.size());
+  d["time"] = to_numpy(std::move(collector->time));
+  d["values"] = to_numpy(std::move(collector->values), {rows, cols});
+  py::dict ev;
+  ev["time"] = to_numpy(std::move(collector->event_time));
+  std::vector<std::string> joints = clearance_joint_names(model);
+  py::list joint;
+  for (int k : collector->event_joint) joint.append(joints[k]);
+  ev["joint"] = joint;
+  ev["onset"] = py::array(py::cast(collector->event_onset));
+  ev["velocity"] = to_numpy(std::move(collector->event_velocity));
+  d["events"] = ev;
+  d["initial_contact"] = collector->initial_contact;
+  return d;
+}
+
+lash::AnalysisOptions analysis_options(const py::dict& o, std::atomic<int>* interrupt) {
+  lash::AnalysisOptions a;
+  for (const auto& [key, value] : o) {
+    const auto k = key.cast<std::string>();
+    if (k == "ideal_twin") a.ideal_twin = value.cast<bool>();
+    else if (k == "lyapunov") a.lyapunov = value.cast<bool>();
+    else if (k == "lyapunov_d0") a.lyapunov_d0 = value.cast<double>();
+    else if (k == "poincare_driver") a.poincare_driver = value.cast<std::string>();
+    else if (k == "section_planes") a.section_planes = value.cast<std::vector<std::string>>();
+    else if (k == "discard_periods") a.discard_periods = value.cast<int>();
+    else if (k == "fft_channels") a.fft_channels = value.cast<std::vector<std::string>>();
+    else if (k == "phase") a.phase = value.cast<std::vector<std::pair<std::string, std::string>>>();
+    else if (k == "continuous_contact_time") a.continuous_contact_time = value.cast<double>();
+    else if (k == "stats_window") {
+      const auto w = value.cast<std::pair<double, double>>();
+      a.stats_t0 = w.first, a.stats_t1 = w.second;
+    } else if (k == "stats_angle") {
+      const auto w = value.cast<std::pair<double, double>>();
+      a.stats_angle0 = w.first, a.stats_angle1 = w.second;
+    } else
+      throw std::invalid_argument("unknown analysis option '" + k + "'");
+  }
+  a.interrupt = interrupt;
+  return a;
+}
+
+py::dict verdict_dict(const lash::MotionVerdict& v) {
+  py::dict d;
+  d["kind"] = v.kind;
+  d["evidence"] = v.evidence;
+  d["rule"] = v.rule;
+  d["lyapunov_exponent"] = v.lyapunov_exponent;
+  d["period"] = v.period;
+  d["distinct_points"] = v.distinct_points;
+  d["sections"] = v.sections;
+  d["off_harmonic_peaks"] = v.off_harmonic_peaks;
+  return d;
+}
+
+py::dict modes_dict(const lash::ModeSummary& m) {
+  py::dict d;
+  py::list episodes;
+  for (const auto& e : m.episodes) episodes.append(py::make_tuple(e.start, e.end, e.continuous));
+  d["episodes"] = episodes;
+  d["free_flight_share"] = m.free_flight_share;
+  d["impact_share"] = m.impact_share;
+  d["continuous_share"] = m.continuous_share;
+  d["impacts"] = m.impacts;
+  d["impact_velocities"] = to_numpy(std::vector<double>(m.impact_velocities));
+  return d;
+}
+
+/// lash.analysis.analyze's engine: analyze_run with its typed results as dicts of arrays.
+py::dict analyze(const CompiledModel& cm, const py::dict& options) {
+  std::atomic<int> interrupt{0};
+  const lash::AnalysisOptions ao = analysis_options(options, &interrupt);
+  lash::check_options(ao);
+  std::function<lash::RunAnalysis()> work = [&] { return lash::analyze_run(cm.loaded.model, ao); };
+  lash::RunAnalysis ra = run_interruptible(work, interrupt);
+  py::dict d;
+  d["result"] = run_result_dict(ra.result);
+  d["period_driver"] = ra.period_driver;
+  d["period"] = ra.period;
+  d["verdict"] = verdict_dict(ra.verdict);
+  if (ra.poincare) {
+    const auto& p = *ra.poincare;
+    py::dict pd;
+    pd["kind"] = p.kind;
+    pd["planes"] = p.planes;
+    pd["period"] = p.period;
+    pd["discarded_periods"] = p.discarded_periods;
+    const size_t width = p.points.empty() ? 0 : p.points.front().size();
+    std::vector<double> flat;
+    for (const auto& pt : p.points) flat.insert(flat.end(), pt.begin(), pt.end());
+    pd["points"] = to_numpy(std::move(flat), {static_cast<py::ssize_t>(p.points.size()),
+                                              static_cast<py::ssize_t>(width)});
+    pd["times"] = to_numpy(std::vector<double>(p.times));
+    pd["variables"] = p.variables;
+    pd["distinct"] = p.distinct;
+    pd["tolerance"] = p.tolerance;
+    d["poincare"] = pd;
+  } else {
+    d["poincare"] = py::none();
+  }
+  py::dict spectra;
+  for (auto& s : ra.spectra) {
+    py::dict sd;
+    sd["frequency"] = to_numpy(std::move(s.frequency));
+    sd["amplitude"] = to_numpy(std::move(s.amplitude));
+    sd["window"] = s.window;
+    sd["discarded_time"] = s.discarded_time;
+    spectra[py::str(s.channel)] = sd;
+  }
+  d["spectra"] = spectra;
+  py::dict stats;
+  for (const auto& s : ra.statistics) {
+    py::dict sd;
+    sd["samples"] = s.samples;
+    sd["min"] = s.min;
+    sd["max"] = s.max;
+    sd["peak"] = s.peak;
+    sd["rms"] = s.rms;
+    sd["crest"] = s.crest;
+    sd["t0"] = s.t0;
+    sd["t1"] = s.t1;
+    stats[py::str(s.channel)] = sd;
+  }
+  d["statistics"] = stats;
+  py::dict clearance;
+  for (const auto& c : ra.clearance) {
+    py::dict cd = modes_dict(c.modes);
+    cd["clearance"] = c.clearance;
+    cd["continuous_contact_time"] = c.continuous_contact_time;
+    clearance[py::str(c.joint)] = cd;
+  }
+  d["clearance_joints"] = clearance;
+  if (ra.lyapunov) {
+    const auto& l = *ra.lyapunov;
+    py::dict ld;
+    ld["estimated"] = l.estimated;
+    ld["ok"] = l.ok;
+    ld["exponent"] = l.exponent;
+    ld["renormalisations"] = l.renormalisations;
+    ld["interval"] = l.interval;
+    ld["d0"] = l.d0;
+    ld["t0"] = l.t0;
+    ld["history"] = l.history;
+    ld["message"] = l.message;
+    d["lyapunov"] = ld;
+  } else {
+    d["lyapunov"] = py::none();
+  }
+  if (ra.ideal_twin) {
+    py::dict cmp;
+    for (const auto& c : ra.ideal_twin->comparison) {
+      py::dict cd;
+      cd["rms_deviation"] = c.rms_deviation;
+      cd["max_deviation"] = c.max_deviation;
+      cd["ideal_peak"] = c.ideal_peak;
+      cd["peak_ratio"] = c.peak_ratio;
+      cmp[py::str(c.channel)] = cd;
+    }
+    d["ideal_twin"] = cmp;
+  } else {
+    d["ideal_twin"] = py::none();
+  }
+  return d;
+}
+
+// --- YAML for models built in code ----------------------------------------------------------
+
+/// Python data (dict, list, tuple, str, int, float, bool, None) as a YAML node; floats are
+/// written as Python's repr, the shortest text that reads back to the same double.
+YAML::Node to_yaml(const py::handle& h) {
+  if (h.is_none()) return YAML::Node(YAML::NodeType::Null);
+  if (py::isinstance<py::bool_>(h)) return YAML::Node(h.cast<bool>() ? "true" : "false");
+  if (py::isinstance<py::int_>(h)) return YAML::Node(py::str(h).cast<std::string>());
+  if (py::isinstance<py::float_>(h)) return YAML::Node(py::repr(h).cast<std::string>());
+  if (py::isinstance<py::str>(h)) return YAML::Node(h.cast<std::string>());
+  if (py::isinstance<py::dict>(h)) {
+    YAML::Node n(YAML::NodeType::Map);
+    for (const auto& [k, v] : h.cast<py::dict>()) n[py::str(k).cast<std::string>()] = to_yaml(v);
+    return n;
+  }
+  if (py::isinstance<py::list>(h) || py::isinstance<py::tuple>(h)) {
+    YAML::Node n(YAML::NodeType::Sequence);
+    bool scalars = true;
+    for (const auto& v : h) {
+      n.push_back(to_yaml(v));
+      scalars = scalars && !py::isinstance<py::dict>(v) && !py::isinstance<py::list>(v);
+    }
+    if (scalars) n.SetStyle(YAML::EmitterStyle::Flow);  // positions: [0.1, 0]
+    return n;
+  }
+  if (py::hasattr(h, "__float__"))  // NumPy scalars
+    return YAML::Node(py::repr(py::float_(py::reinterpret_borrow<py::object>(h))).cast<std::string>());
+  throw py::type_error("cannot write a " + py::str(h.get_type()).cast<std::string>() +
+                       " into a model file");
+}
+
+/// A YAML scalar as the Python value it reads as: int, float, bool, None or str.
+py::object scalar(const std::string& s) {
+  if (s == "true" || s == "True") return py::bool_(true);
+  if (s == "false" || s == "False") return py::bool_(false);
+  if (s == "~" || s == "null") return py::none();
+  char* end = nullptr;
+  if (!s.empty()) {
+    const long long i = std::strtoll(s.c_str(), &end, 10);
+    if (*end == '\0') return py::int_(i);
+    const double d = std::strtod(s.c_str(), &end);
+    if (*end == '\0') return py::float_(d);
+  }
+  return py::str(s);
+}
+
+py::object from_yaml(const YAML::Node& n) {
+  switch (n.Type()) {
+    case YAML::NodeType::Map: {
+      py::dict d;
+      for (const auto& kv : n) d[py::str(kv.first.Scalar())] = from_yaml(kv.second);
+      return std::move(d);
+    }
+    case YAML::NodeType::Sequence: {
+      py::list l;
+      for (const auto& v : n) l.append(from_yaml(v));
+      return std::move(l);
+    }
+    case YAML::NodeType::Scalar:
+      return n.Tag() == "!" ? py::object(py::str(n.Scalar())) : scalar(n.Scalar());
+    default:
+      return py::none();
+  }
+}
+
+}  // namespace
+
+PYBIND11_MODULE(_lash, m) {
+  m.doc() = "Lash's C++ engine (use the package lash, which wraps this module).";
+
+  // lash::ModelError → lash.ModelError(ValueError), with every problem as `diagnostics`.
+  static py::exception<lash::ModelError> model_error(m, "ModelError", PyExc_ValueError);
+  static py::exception<lash::IoError> io_error(m, "IoError", PyExc_OSError);
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const lash::ModelError& e) {
+      py::list diagnostics;
+      for (const auto& d : e.diagnostics())
+        diagnostics.append(py::make_tuple(d.file, d.line, d.column, d.element, d.message));
+      py::object type = py::reinterpret_borrow<py::object>(model_error.ptr());
+      py::object instance = type(py::str(e.what()));
+      instance.attr("diagnostics") = diagnostics;
+      PyErr_SetObject(model_error.ptr(), instance.ptr());
+    } catch (const lash::IoError& e) {
+      io_error(e.what());
+    }
+  });
+
+  py::class_<CompiledModel, std::shared_ptr<CompiledModel>>(m, "CompiledModel",
+      "A loaded, validated model (lash::LoadedModel).")
+      .def_property_readonly("name", [](const CompiledModel& c) { return c.loaded.model.name; })
+      .def_property_readonly("resolved_yaml",
+                             [](const CompiledModel& c) { return c.loaded.resolved_yaml; })
+      .def_property_readonly("channels", [](const CompiledModel& c) {
+        py::list l;
+        for (const auto& ch : c.channels) l.append(py::make_tuple(ch.name, ch.unit, ch.description));
+        return l;
+      })
+      .def_property_readonly("bodies", [](const CompiledModel& c) {
+        std::vector<std::string> v;
+        for (const auto& b : c.loaded.model.bodies) v.push_back(b.name);
+        return v;
+      })
+      .def_property_readonly("joints", [](const CompiledModel& c) {
+        std::vector<std::string> v;
+        for (const auto& j : c.loaded.model.joints) v.push_back(j.name);
+        return v;
+      })
+      .def_property_readonly("clearance_joints",
+                             [](const CompiledModel& c) { return clearance_joint_names(c.loaded.model); })
+      .def_property_readonly("end_time", [](const CompiledModel& c) { return c.loaded.model.solver.end_time; })
+      .def_property_readonly("output_interval",
+                             [](const CompiledModel& c) { return c.loaded.model.solver.output_interval; });
+
+  m.def("load_text",
+        [](const std::string& text, const std::string& filename,
+           const std::vector<std::string>& overrides) {
+          auto c = std::make_shared<CompiledModel>(
+              CompiledModel{lash::load_model_text(text, filename, overrides), {}});
+          c->channels = lash::channel_info(c->loaded.model, lash::Workspace(c->loaded.model));
+          return c;
+        },
+        py::arg("text"), py::arg("filename"), py::arg("overrides") = std::vector<std::string>{},
+        "lash::load_model_text: parse, apply overrides, validate; raises ModelError.");
+  m.def("simulate", &simulate, py::arg("model"),
+        "lash::simulate with an in-memory observer; returns a dict of arrays.");
+  m.def("analyze", &analyze, py::arg("model"), py::arg("options") = py::dict(),
+        "lash::analyze_run; returns a dict of its typed results.");
+  m.def("emit_yaml", [](const py::object& data) {
+    YAML::Emitter out;
+    out.SetIndent(2);
+    out << to_yaml(data);
+    return std::string(out.c_str()) + "\n";
+  }, py::arg("data"), "Python data as YAML text (yaml-cpp's emitter).");
+  m.def("parse_yaml", [](const std::string& text) { return from_yaml(YAML::Load(text)); },
+        py::arg("text"), "YAML text as Python data (yaml-cpp's parser).");
+
+  // --- the model-free analysis functions (analysis/) ----------------------------------------
+  m.def("amplitude_spectrum",
+        [](const std::vector<double>& x, double dt, const std::string& window) {
+          lash::Window w;
+          if (window == "hann") w = lash::Window::hann;
+          else if (window == "rectangular") w = lash::Window::rectangular;
+          else throw std::invalid_argument("window must be 'hann' or 'rectangular', got '" + window + "'");
+          lash::Spectrum s = lash::amplitude_spectrum(x, dt, w);
+          py::dict d;
+          d["frequency"] = to_numpy(std::move(s.frequency));
+          d["amplitude"] = to_numpy(std::move(s.amplitude));
+          d["psd"] = to_numpy(std::move(s.psd));
+          d["window"] = s.window;
+          return d;
+        },
+        py::arg("x"), py::arg("dt"), py::arg("window") = "hann");
+  m.def("count_distinct", &lash::count_distinct, py::arg("points"), py::arg("tol"));
+  m.def("classify_motion",
+        [](double lyapunov, double period, int distinct, int sections, int peaks, double min_end) {
+          const lash::Verdict v = lash::classify_motion(lyapunov, period, distinct, sections, peaks, min_end);
+          return py::make_tuple(v.kind, v.evidence);
+        },
+        py::arg("lyapunov"), py::arg("period"), py::arg("distinct"), py::arg("sections"),
+        py::arg("non_harmonic_peaks") = -1, py::arg("min_end_time") = 0.0);
+  m.def("verdict_rule", [] { return std::string(lash::verdict_rule()); });
+  m.def("contact_modes",
+        [](const std::vector<double>& times, const std::vector<bool>& onset,
+           const std::vector<double>& velocities, bool in_contact_at_t0, double t0, double t1,
+           double continuous_time) {
+          return modes_dict(lash::contact_modes(times, onset, velocities, in_contact_at_t0, t0, t1,
+                                                continuous_time));
+        },
+        py::arg("times"), py::arg("onset"), py::arg("velocities"), py::arg("in_contact_at_t0"),
+        py::arg("t0"), py::arg("t1"), py::arg("continuous_time"));
+  m.def("decimate_min_max",
+        [](const std::vector<double>& t, const std::vector<double>& v, size_t buckets) {
+          std::vector<double> to, vo;
+          lash::decimate_min_max(t, v, buckets, to, vo);
+          return py::make_tuple(to_numpy(std::move(to)), to_numpy(std::move(vo)));
+        },
+        py::arg("t"), py::arg("v"), py::arg("buckets"));
+}

@@ -1,0 +1,233 @@
+"""The Python module lash against the CLI (same numbers to the last printed digit), its errors,
+Ctrl-C, models built in code, the analysis functions. Run by ctest (tests/CMakeLists.txt) with
+PYTHONPATH=build/python, LASH_BINARY and LASH_SOURCE_DIR set."""
+import csv
+import json
+import math
+import os
+import signal
+import subprocess
+import threading
+import time
+
+import numpy as np
+import pytest
+
+import lash
+
+SOURCE = os.environ.get("LASH_SOURCE_DIR", os.path.join(os.path.dirname(__file__), "..", ".."))
+LASH = os.environ.get("LASH_BINARY", os.path.join(SOURCE, "build", "lash"))
+FLORES = os.path.join(SOURCE, "examples", "flores_slider_crank.yaml")
+T_END = 0.006  # s: 1/2 crank revolution at 5000 rpm, with impacts at 0.25 mm clearance
+CLEARANCE = 0.25e-3
+
+
+def cli_run(tmp_path, *sets):
+    out = tmp_path / "cli"
+    args = [LASH, "run", FLORES, "-o", str(out), "-q"]
+    for s in sets:
+        args += ["--set", s]
+    subprocess.run(args, check=True, capture_output=True)
+    return out
+
+
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory):
+    """The same model run by `lash run` and by lash.simulate."""
+    tmp = tmp_path_factory.mktemp("flores")
+    out = cli_run(tmp, f"joints.rod_slider.clearance={CLEARANCE!r}", f"solver.end_time={T_END!r}")
+    model = lash.load(FLORES)
+    model.set("joints.rod_slider.clearance", CLEARANCE)
+    result = lash.simulate(model, t_end=T_END)
+    return out, result
+
+
+def test_timeseries_equals_cli_csv_to_the_last_digit(runs):
+    out, result = runs
+    with open(out / "timeseries.csv", newline="") as f:
+        rows = list(csv.reader(f))
+    assert rows[0] == ["time"] + result.channels
+    assert len(rows) - 1 == len(result.time) == int(round(T_END / 1e-5)) + 1
+    # The CSV prints %.9g (std::to_chars general, precision 9): format the arrays the same way.
+    table = np.column_stack([result.time, result.values])
+    mismatches = [(i, j) for i, row in enumerate(rows[1:]) for j, text in enumerate(row)
+                  if text != "%.9g" % table[i, j]]
+    assert mismatches == [], f"{len(mismatches)} cells differ, first {mismatches[:3]}"
+    assert result["slider.ax"].shape == result.time.shape
+    assert np.shares_memory(result["slider.ax"], result.values)  # a view, no copy
+
+
+def test_events_and_summary_equal_cli(runs):
+    out, result = runs
+    with open(out / "events.csv", newline="") as f:
+        rows = list(csv.reader(f))[1:]
+    ev = result.events
+    assert len(rows) == len(ev["time"]) > 0
+    for row, t, joint, kind, v in zip(rows, ev["time"], ev["joint"], ev["event"], ev["velocity"]):
+        assert row == ["%.12g" % t, joint, kind, "%.9g" % v]
+    summary = json.loads((out / "summary.json").read_text())
+    mine = result.summary
+    assert mine["status"]["outcome"] == summary["status"]["outcome"] == "completed"
+    for name, peaks in summary["channels"].items():
+        for key in ("min", "t_min", "max", "t_max", "peak", "unit", "description"):
+            assert mine["channels"][name][key] == peaks[key], (name, key)
+    for joint, stats in summary["clearance_joints"].items():
+        for key in ("impacts", "separations", "max_impact_velocity"):
+            assert mine["clearance_joints"][joint][key] == stats[key], (joint, key)
+        assert mine["clearance_joints"][joint]["contact_share"] == pytest.approx(
+            stats["contact_share"], abs=1e-12)
+    for key in ("steps", "rejected_steps", "rhs_evaluations", "events"):
+        assert mine["integrator"][key] == summary["integrator"][key], key
+
+
+def test_model_error_carries_file_line_column_like_the_cli(tmp_path):
+    text = open(FLORES).read().replace("clearance: 0.5e-3}", "clearance: -0.5e-3}")
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(text)
+    line = next(i for i, l in enumerate(text.splitlines(), 1) if "clearance: -0.5e-3" in l)
+    with pytest.raises(lash.ModelError) as err:
+        lash.load(bad)
+    assert isinstance(err.value, ValueError)
+    message = str(err.value)
+    assert f"{bad}:{line}:" in message and "clearance must be >= 0, got -0.0005" in message
+    file, l, column, element, what = err.value.diagnostics[0]
+    assert (file, l, element) == (str(bad), line, "joint 'rod_slider'") and column > 0
+    cli = subprocess.run([LASH, "check", str(bad)], capture_output=True, text=True)
+    assert cli.returncode == 2
+    for d in err.value.diagnostics:  # the same sentences as `lash check`
+        assert f"{d[0]}:{d[1]}:{d[2]}: {d[3]}: {d[4]}" in cli.stderr
+
+
+def test_bad_override_and_bad_arguments():
+    model = lash.load(FLORES)
+    model.set("joints.rod_slidr.clearance", 1e-4)
+    with pytest.raises(lash.ModelError, match="did you mean 'rod_slider'"):
+        lash.simulate(model, t_end=0.001)
+    with pytest.raises(ValueError, match="t_end must be"):
+        lash.simulate(lash.load(FLORES), t_end=-1.0)
+    with pytest.raises(OSError):
+        lash.load("/nonexistent/model.yaml")
+    result = lash.simulate(FLORES, t_end=0.0005)
+    with pytest.raises(KeyError, match="did you mean 'slider.ax'"):
+        result["slider.axx"]
+
+
+def test_ctrl_c_stops_a_long_run_with_keyboard_interrupt():
+    model = lash.load(FLORES)
+    timer = threading.Timer(0.3, os.kill, (os.getpid(), signal.SIGINT))
+    start = time.monotonic()
+    timer.start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            # About 1 s of wall time per simulated second: 30 s uninterrupted.
+            lash.simulate(model, t_end=30.0, output_interval=1e-3)
+    finally:
+        timer.cancel()
+    assert time.monotonic() - start < 5.0
+
+
+def test_simulate_releases_the_gil():
+    counter = [0]
+    done = threading.Event()
+
+    def count():
+        while not done.is_set():
+            counter[0] += 1
+
+    t = threading.Thread(target=count)
+    t.start()
+    try:
+        lash.simulate(FLORES, t_end=0.012)
+    finally:
+        done.set()
+        t.join()
+    assert counter[0] > 10000  # the counting thread ran while the engine did
+
+
+def flores_in_code():
+    m = lash.Model.new("flores_slider_crank", gravity=[0, -9.81])
+    m.add_ground_marker("O", [0, 0])
+    m.add_body("crank", mass=0.30, inertia=1.0e-4, position=[0.025, 0], angle=0,
+               markers={"O": [-0.025, 0], "A": [0.025, 0]})
+    m.add_body("rod", mass=0.21, inertia=2.5e-4, position=[0.11, 0], angle=0,
+               markers={"A": [-0.06, 0], "B": [0.06, 0]})
+    m.add_body("slider", mass=0.14, inertia=1.0e-4, position=[0.17, 0], markers={"O": [0, 0]})
+    m.set_clearance_defaults(journal_radius=9.5e-3,
+                             material={"youngs_modulus": 207e9, "poisson_ratio": 0.3},
+                             normal_law="lankarani_nikravesh", restitution=0.9,
+                             friction={"law": "none"})
+    m.add_joint("crank_pivot", "revolute", journal="crank.O", bearing="ground.O")
+    m.add_joint("crank_rod", "revolute", journal="crank.A", bearing="rod.A")
+    m.add_clearance_joint("rod_slider", journal="rod.B", bearing="slider.O", clearance=0.5e-3)
+    m.add_joint("slider_guide", "translational", guide="ground.O", slider="slider.O", axis=[1, 0])
+    m.add_driver("crank", joint="crank_pivot", speed_rpm=5000)
+    m.set_solver(integrator="dopri5", rtol=1.0e-8, atol=1.0e-11, end_time=0.024,
+                 output_interval=1.0e-5, initial_state="ideal")
+    return m
+
+
+def test_model_built_in_code_runs_like_the_file_and_saves(tmp_path):
+    m = flores_in_code()
+    path = tmp_path / "built.yaml"
+    m.save(str(path))
+    again = lash.load(path)
+    a = lash.simulate(m, t_end=0.003)
+    b = lash.simulate(again, t_end=0.003)
+    c = lash.simulate(FLORES, t_end=0.003)
+    assert a.channels == c.channels
+    assert np.array_equal(a.values, c.values) and np.array_equal(b.values, c.values)
+    # A clearance set in code changes the run like --set does.
+    m.set("joints.rod_slider.clearance", CLEARANCE)
+    d = lash.simulate(m, t_end=0.003)
+    e = lash.simulate(FLORES, t_end=0.003, overrides=[f"joints.rod_slider.clearance={CLEARANCE!r}"])
+    assert np.array_equal(d.values, e.values) and not np.array_equal(d.values, c.values)
+    with pytest.raises(ValueError, match="exists already"):
+        m.add_body("rod", mass=1.0, inertia=1.0)
+
+
+def test_a_model_built_in_code_with_a_mistake_names_the_element():
+    m = flores_in_code()
+    m.add_joint("extra", "revolute", journal="rod.Q", bearing="ground.O")
+    with pytest.raises(lash.ModelError, match="joint 'extra'"):
+        m.check()
+
+
+def test_analysis():
+    model = lash.load(FLORES)
+    a = lash.analysis.analyze(model, lyapunov=False)
+    assert a["period"] == pytest.approx(2 * math.pi / (5000 * 2 * math.pi / 60))
+    p = a["poincare"]
+    assert p["kind"] == "stroboscopic" and p["points"].shape[1] == 2 and len(p["times"]) >= 1
+    assert a["verdict"]["kind"] in {"periodic", "quasi-periodic", "chaotic", "undetermined"}
+    assert "slider.ax" in a["spectra"] and a["ideal_twin"] is not None
+    # The model-free functions: a sine of amplitude 3 on bin 8 reads 3 there.
+    n, dt = 256, 1e-3
+    t = np.arange(n) * dt
+    s = lash.analysis.amplitude_spectrum(3.0 * np.sin(2 * np.pi * 8 / (n * dt) * t), dt, "rectangular")
+    k = int(np.argmax(s["amplitude"]))
+    assert s["frequency"][k] == pytest.approx(8 / (n * dt)) and s["amplitude"][k] == pytest.approx(3.0)
+    assert lash.analysis.count_distinct([[0, 0], [1e-9, 0], [1, 1]], 1e-6) == 2
+    kind, evidence = lash.analysis.classify_motion(float("nan"), 0.012, 1, 20)
+    assert kind == "periodic" and evidence
+    with pytest.raises(ValueError, match="window"):
+        lash.analysis.amplitude_spectrum(np.ones(8), 1e-3, "hamming")
+
+
+def test_to_pandas(runs):
+    pd = pytest.importorskip("pandas")
+    _, result = runs
+    df = result.to_pandas()
+    assert list(df.columns) == result.channels and df.index.name == "time"
+    assert np.array_equal(df["slider.ax"].to_numpy(), result["slider.ax"])
+
+
+def test_every_public_function_has_a_docstring():
+    import inspect
+    for mod in (lash, lash.analysis):
+        for name in mod.__all__:
+            obj = getattr(mod, name)
+            if inspect.isfunction(obj) or inspect.isclass(obj):
+                assert obj.__doc__ and len(obj.__doc__) > 40, name
+    assert "KeyboardInterrupt" in lash.simulate.__doc__
+    stub = os.path.join(os.path.dirname(lash.__file__), "__init__.pyi")
+    assert os.path.exists(stub)
