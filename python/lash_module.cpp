@@ -28,6 +28,8 @@
 #include "io/files.hpp"
 #include "io/model_loader.hpp"
 #include "study/run_analysis.hpp"
+#include "study/study_db.hpp"
+#include "study/sweep.hpp"
 
 namespace py = pybind11;
 
@@ -470,6 +472,62 @@ PYBIND11_MODULE(_lash, m) {
         },
         py::arg("text"), py::arg("filename"), py::arg("overrides") = std::vector<std::string>{},
         "lash::load_model_text: parse, apply overrides, validate; raises ModelError.");
+  m.def("sweep",
+        [](const std::string& study, const std::string& output, int jobs, bool resume) {
+          const lash::StudySpec spec = lash::load_study_file(study);
+          lash::StudyFolder folder(output, spec, resume);
+          const int already = folder.already();
+          std::atomic<int> interrupt{0};
+          const std::function<std::string()> work = [&] {
+            return lash::run_study_threads(folder, spec, jobs, &interrupt, nullptr);
+          };
+          const std::string error = run_interruptible(work, interrupt);
+          if (!error.empty()) throw lash::IoError(output + "/study.db", error);
+          py::dict d;
+          d["total"] = folder.runs().size();
+          d["already"] = already;
+          d["recorded"] = folder.db().finished().size();
+          return d;
+        },
+        py::arg("study"), py::arg("output"), py::arg("jobs") = 0, py::arg("resume") = false,
+        "lash sweep on local threads (lash::StudyFolder + lash::run_study_threads); raises "
+        "ModelError for a bad study file, ValueError for a folder that holds another study.");
+  m.def("read_study",
+        [](const std::string& db) {
+          const lash::StudyTable t = lash::read_study(db);
+          py::dict d;
+          d["name"] = t.name;
+          d["total_runs"] = t.total_runs;
+          d["parameters"] = t.parameters;
+          py::list rows;
+          for (const auto& r : t.rows) {
+            py::dict row;
+            row["run"] = r.run;
+            for (size_t p = 0; p < t.parameters.size(); ++p)
+              row[py::str(t.parameters[p])] = std::isnan(r.numbers[p]) ? py::object(py::str(r.values[p]))
+                                                                        : py::object(py::float_(r.numbers[p]));
+            row["status"] = r.status;
+            row["verdict"] = r.verdict;
+            row["message"] = r.message;
+            row["wall_seconds"] = r.wall_seconds;
+            for (const auto& [name, v] : r.metrics) row[py::str(name)] = v;
+            rows.append(row);
+          }
+          d["rows"] = rows;
+          py::dict sections;
+          for (size_t c = 0; c < t.section_channels.size(); ++c) {
+            std::vector<int> run;
+            std::vector<double> value;
+            for (const auto& [r, v] : t.points[c]) run.push_back(r), value.push_back(v);
+            py::dict col;
+            col["run"] = run;
+            col["value"] = value;
+            sections[py::str(t.section_channels[c])] = col;
+          }
+          d["sections"] = sections;
+          return d;
+        },
+        py::arg("db"), "lash::read_study: a study database as dicts.");
   m.def("simulate", &simulate, py::arg("model"),
         "lash::simulate with an in-memory observer; returns a dict of arrays.");
   m.def("analyze", &analyze, py::arg("model"), py::arg("options") = py::dict(),

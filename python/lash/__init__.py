@@ -33,7 +33,8 @@ simulate. str() lists every problem as the CLI does, `file:line:column: element:
 (line 0 for an override); `.diagnostics` holds them as (file, line, column, element, message)."""
 IoError.__doc__ = """A file Lash could not read or write (an OSError), with the path and the reason."""
 
-__all__ = ["Model", "Result", "ModelError", "IoError", "load", "loads", "simulate", "analysis"]
+__all__ = ["Model", "Result", "Study", "ModelError", "IoError", "load", "loads", "simulate",
+           "sweep", "read_study", "analysis"]
 __version__ = "0.1.0"
 
 
@@ -393,6 +394,69 @@ def simulate(model: Model | str | os.PathLike, t_end: Optional[float] = None, *,
     extra = _run_overrides(t_end, output_interval, integrator, overrides)
     compiled = model.compiled(extra)
     return Result(model, compiled, _lash.simulate(compiled))
+
+
+class Study:
+    """The results of a parameter study (`lash sweep`), read from its study.db.
+
+    study.rows        one dict per recorded run: "run", each parameter, "status", "verdict",
+                      "message", "wall_seconds" and every metric (docs/studies.md)
+    study.parameters  the parameter names (model paths or case names)
+    study.sections    {channel: {"run": [...], "value": [...]}}: the points of the bifurcation
+                      diagram, after the transient
+    study["x"]        one column over the runs as a NumPy array (NaN where a run lacks it)
+    study.to_pandas() the rows as a pandas DataFrame (pandas needed)
+    """
+
+    def __init__(self, db_path: str | os.PathLike) -> None:
+        data = _lash.read_study(os.fspath(db_path))
+        self.path = os.fspath(db_path)
+        self.name: str = data["name"]
+        self.total_runs: int = data["total_runs"]
+        self.parameters: List[str] = list(data["parameters"])
+        self.rows: List[Dict[str, Any]] = list(data["rows"])
+        self.sections: Dict[str, Dict[str, Any]] = {
+            k: {"run": np.asarray(v["run"], dtype=int), "value": np.asarray(v["value"], dtype=float)}
+            for k, v in data["sections"].items()}
+
+    def __len__(self) -> int:
+        return len(self.rows)
+
+    def __getitem__(self, column: str) -> np.ndarray:
+        values = [row.get(column, math.nan) for row in self.rows]
+        if all(isinstance(v, (int, float)) for v in values):
+            return np.asarray(values, dtype=float)
+        return np.asarray(values, dtype=object)
+
+    def to_pandas(self):
+        """The rows as a pandas DataFrame indexed by run."""
+        import pandas as pd
+        return pd.DataFrame(self.rows).set_index("run")
+
+    def __repr__(self) -> str:
+        failed = sum(1 for r in self.rows if r["status"] != "completed")
+        return f"<lash.Study {self.name!r}: {len(self.rows)} of {self.total_runs} runs, {failed} failed>"
+
+
+def sweep(study: str | os.PathLike, output: str | os.PathLike, *, jobs: int = 0,
+          resume: bool = False) -> Study:
+    """Runs a study file (docs/studies.md) on `jobs` local threads (0: every core), as
+    `lash sweep STUDY -o OUTPUT [--resume]`: every finished run is written to OUTPUT/study.db in
+    its own transaction, runs.csv and sections.csv beside it. Returns the Study read back.
+
+    Raises ModelError (with file:line:column) for a bad study file, ValueError when OUTPUT holds a
+    study already and `resume` is False (or holds another study), IoError when the database cannot
+    be written. Ctrl-C stops the runs at their next output; the finished ones stay recorded and
+    `resume=True` runs the rest.
+    """
+    _lash.sweep(os.fspath(study), os.fspath(output), jobs, resume)
+    return Study(os.path.join(os.fspath(output), "study.db"))
+
+
+def read_study(output: str | os.PathLike) -> Study:
+    """The Study in a folder written by `lash sweep` (or its study.db)."""
+    path = os.fspath(output)
+    return Study(path if path.endswith(".db") else os.path.join(path, "study.db"))
 
 
 from . import analysis  # noqa: E402  (uses Model and Result above)

@@ -5,13 +5,9 @@
 #include <unistd.h>
 
 #include <chrono>
-#include <condition_variable>
 #include <cstdlib>
-#include <deque>
 #include <filesystem>
 #include <iostream>
-#include <mutex>
-#include <thread>
 
 #include "io/diagnostics.hpp"
 #include "io/files.hpp"
@@ -77,50 +73,11 @@ int study_error(const ModelError& e) {
   return kExitBadInput;
 }
 
-/// The folder, its lock and its database, checked before any run starts.
-struct StudyFolder {
-  std::unique_ptr<FolderLock> lock;
-  std::unique_ptr<StudyDb> db;
-  std::vector<StudyRun> todo;
-  int already = 0;
-};
-
-int open_folder(const StudySpec& spec, const std::vector<StudyRun>& runs, const std::string& out,
-                bool resume, StudyFolder& f) {
-  try {
-    f.lock = std::make_unique<FolderLock>(out);
-    const std::string db = out + "/study.db";
-    if (std::filesystem::exists(db) && !resume) {
-      std::cerr << "error: " << db
-                << ": this folder holds a study already: add --resume to finish it (runs it holds "
-                   "are kept and not run again), or choose another output folder\n";
-      return kExitBadInput;
-    }
-    f.db = std::make_unique<StudyDb>(db, spec, static_cast<int>(runs.size()));
-    const auto finished = f.db->finished();
-    for (const auto& r : runs)
-      if (!finished.count(r.index)) f.todo.push_back(r);
-    f.already = static_cast<int>(runs.size() - f.todo.size());
-  } catch (const IoError& e) {
-    std::cerr << "error: " << e.what() << "\n";
-    return kExitIo;
-  } catch (const std::exception& e) {
-    std::cerr << "error: " << e.what() << "\n";
-    return kExitBadInput;
-  }
-  return -1;
-}
-
-/// The end of a sweep: CSV exports, a closing line, the exit code.
-int finish(StudyFolder& f, const std::string& out, int total, const Progress& progress,
-           int interrupted_by, const std::string& write_error, bool quiet) {
-  try {
-    f.db->export_csv(out);
-  } catch (const std::exception& e) {
-    std::cerr << "error: " << e.what() << "\n";
-    return kExitIo;
-  }
-  const int recorded = static_cast<int>(f.db->finished().size());
+/// The end of a sweep: a closing line and the exit code.
+int finish(StudyFolder& f, int total, const Progress& progress, int interrupted_by,
+           const std::string& write_error, bool quiet) {
+  const std::string& out = f.folder();
+  const int recorded = static_cast<int>(f.db().finished().size());
   if (!write_error.empty()) {
     std::cerr << "\nerror: " << write_error << "\n" << recorded << " of " << total
               << " runs are recorded in " << out << "/study.db; `--resume` runs the rest\n";
@@ -223,19 +180,20 @@ int SweepCommand::run(std::atomic<int>& interrupt, const std::function<void()>& 
 #endif
   std::string bundle;
   StudySpec spec;
-  std::vector<StudyRun> runs;
-  StudyFolder folder;
+  std::unique_ptr<StudyFolder> folder;
   int code = -1;
   try {
     spec = load_study_file(study_);
-    runs = study_runs(spec);
+    folder = std::make_unique<StudyFolder>(out, spec, resume_);
   } catch (const ModelError& e) {
     code = study_error(e);
-  } catch (const std::exception& e) {  // a structure the reader did not foresee
-    std::cerr << study_ << ": cannot read the study: " << e.what() << "\n";
+  } catch (const IoError& e) {
+    std::cerr << "error: " << e.what() << "\n";
+    code = kExitIo;
+  } catch (const std::exception& e) {  // the folder, or a structure the reader did not foresee
+    std::cerr << "error: " << e.what() << "\n";
     code = kExitBadInput;
   }
-  if (code < 0) code = open_folder(spec, runs, out, resume_, folder);
   if (code < 0) {
     nlohmann::json models = nlohmann::json::object();
     for (const auto& [p, t] : spec.model_texts) models[p] = t;
@@ -246,89 +204,56 @@ int SweepCommand::run(std::atomic<int>& interrupt, const std::function<void()>& 
 #endif
   if (code >= 0) return code;
 
-  const int total = static_cast<int>(runs.size());
-  Progress progress(total, folder.already, !quiet_);
-  if (!quiet_ && folder.already > 0)
+  const int total = static_cast<int>(folder->runs().size());
+  Progress progress(total, folder->already(), !quiet_);
+  if (!quiet_ && folder->already() > 0)
     fmt::print(stderr, "sweep: {} of {} runs already in {}/study.db; running the other {}\n",
-               folder.already, total, out, folder.todo.size());
+               folder->already(), total, out, folder->todo().size());
   std::string write_error;
-  auto record = [&](const RunRecord& rec, const std::string& worker) {
-    if (rec.status == "interrupted" || !write_error.empty()) return;  // rerun by --resume
-    try {
-      folder.db->add(runs.at(rec.index), rec, worker);
-      progress.add(rec);
-    } catch (const std::exception& e) {
-      write_error = e.what();
-    }
-  };
-
+  try {
 #ifdef LASH_MPI
-  if (size > 1) {
-    // Rank 0 hands out one run at a time to whichever rank asks (runs differ a lot in cost) and
-    // keeps the database; the ranks need no shared file system.
-    size_t next = 0;
-    int active = size - 1;
-    while (active > 0) {
-      MPI_Status st;
-      MPI_Probe(MPI_ANY_SOURCE, kTagResult, MPI_COMM_WORLD, &st);
-      int n = 0;
-      MPI_Get_count(&st, MPI_CHAR, &n);
-      std::string msg(n, '\0');
-      MPI_Recv(msg.data(), n, MPI_CHAR, st.MPI_SOURCE, kTagResult, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
-      if (!msg.empty()) record(record_from_json(nlohmann::json::parse(msg)), "rank " + std::to_string(st.MPI_SOURCE));
-      int index = -1;
-      if (next < folder.todo.size() && interrupt.load() == 0 && write_error.empty())
-        index = folder.todo[next++].index;
-      MPI_Send(&index, 1, MPI_INT, st.MPI_SOURCE, kTagWork, MPI_COMM_WORLD);
-      if (index < 0) --active;
-    }
-    progress.print(true);
-    return finish(folder, out, total, progress, interrupt.load(), write_error, quiet_);
-  }
-#endif
-
-  // Threads: one study, one model text, one workspace per run; the database is written here.
-  const int jobs = std::max(1, std::min<int>(jobs_ > 0 ? jobs_ : static_cast<int>(std::thread::hardware_concurrency()),
-                                             static_cast<int>(folder.todo.size())));
-  std::mutex mu;
-  std::condition_variable cv;
-  std::deque<std::pair<RunRecord, int>> results;
-  std::atomic<size_t> next{0};
-  std::atomic<bool> stop{false};
-  std::vector<std::thread> workers;
-  for (int w = 0; w < jobs; ++w)
-    workers.emplace_back([&, w] {
-      for (;;) {
-        const size_t i = next++;
-        if (i >= folder.todo.size() || stop.load() || interrupt.load() != 0) break;
-        RunRecord rec = run_study_point(spec, folder.todo[i], &interrupt);
-        std::lock_guard<std::mutex> g(mu);
-        results.emplace_back(std::move(rec), w);
-        cv.notify_one();
+    if (size > 1) {
+      // Rank 0 hands out one run at a time to whichever rank asks (runs differ a lot in cost) and
+      // keeps the database; the ranks need no shared file system.
+      size_t next = 0;
+      int active = size - 1;
+      while (active > 0) {
+        MPI_Status st;
+        MPI_Probe(MPI_ANY_SOURCE, kTagResult, MPI_COMM_WORLD, &st);
+        int n = 0;
+        MPI_Get_count(&st, MPI_CHAR, &n);
+        std::string msg(n, '\0');
+        MPI_Recv(msg.data(), n, MPI_CHAR, st.MPI_SOURCE, kTagResult, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+        if (!msg.empty() && write_error.empty()) {
+          const RunRecord rec = record_from_json(nlohmann::json::parse(msg));
+          if (rec.status != "interrupted") {  // rerun by --resume
+            try {
+              folder->db().add(folder->runs().at(rec.index), rec, "rank " + std::to_string(st.MPI_SOURCE));
+              progress.add(rec);
+            } catch (const std::exception& e) {
+              write_error = e.what();
+            }
+          }
+        }
+        int index = -1;
+        if (next < folder->todo().size() && interrupt.load() == 0 && write_error.empty())
+          index = folder->todo()[next++].index;
+        MPI_Send(&index, 1, MPI_INT, st.MPI_SOURCE, kTagWork, MPI_COMM_WORLD);
+        if (index < 0) --active;
       }
-      std::lock_guard<std::mutex> g(mu);
-      RunRecord done;
-      done.index = -1;  // this worker is done
-      results.emplace_back(std::move(done), w);
-      cv.notify_one();
-    });
-  int running = jobs;
-  while (running > 0) {
-    std::unique_lock<std::mutex> lk(mu);
-    cv.wait_for(lk, std::chrono::seconds(1), [&] { return !results.empty(); });
-    while (!results.empty()) {
-      auto [rec, w] = std::move(results.front());
-      results.pop_front();
-      lk.unlock();
-      if (rec.index < 0) --running;
-      else record(rec, "thread " + std::to_string(w));
-      if (!write_error.empty()) stop.store(true);
-      lk.lock();
+      folder->db().export_csv(out);
+    } else
+#endif
+    {
+      write_error = run_study_threads(*folder, spec, jobs_, &interrupt,
+                                      [&](const RunRecord& rec) { progress.add(rec); });
     }
+  } catch (const std::exception& e) {  // the CSV exports
+    std::cerr << "error: " << e.what() << "\n";
+    return kExitIo;
   }
-  for (auto& t : workers) t.join();
   progress.print(true);
-  return finish(folder, out, total, progress, interrupt.load(), write_error, quiet_);
+  return finish(*folder, total, progress, interrupt.load(), write_error, quiet_);
 }
 
 }  // namespace lash::cli

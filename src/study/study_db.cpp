@@ -7,7 +7,12 @@
 #include <cmath>
 #include <ctime>
 #include <map>
+#include <condition_variable>
+#include <deque>
+#include <filesystem>
+#include <mutex>
 #include <sstream>
+#include <thread>
 
 #include "io/files.hpp"
 
@@ -342,6 +347,79 @@ StudyTable read_study(const std::string& path) {
   }
   sqlite3_close(db);
   return t;
+}
+
+StudyFolder::StudyFolder(const std::string& folder, const StudySpec& spec, bool resume)
+    : folder_(folder), runs_(study_runs(spec)) {
+  lock_ = std::make_shared<FolderLock>(folder);
+  const std::string db = folder + "/study.db";
+  if (std::filesystem::exists(db) && !resume)
+    throw std::invalid_argument(db + ": this folder holds a study already: add --resume to finish it "
+                                     "(runs it holds are kept and not run again), or choose another "
+                                     "output folder");
+  db_ = std::make_unique<StudyDb>(db, spec, static_cast<int>(runs_.size()));
+  const auto finished = db_->finished();
+  for (const auto& r : runs_)
+    if (!finished.count(r.index)) todo_.push_back(r);
+}
+
+std::string run_study_threads(StudyFolder& folder, const StudySpec& spec, int jobs,
+                              const std::atomic<int>* interrupt,
+                              const std::function<void(const RunRecord&)>& on_record) {
+  // Threads: one study, one model text, a model and workspace per run; the database is written
+  // by the calling thread only.
+  const auto& todo = folder.todo();
+  const int n = std::max(1, std::min<int>(jobs > 0 ? jobs : static_cast<int>(std::thread::hardware_concurrency()),
+                                          static_cast<int>(todo.size())));
+  auto interrupted = [&] { return interrupt && interrupt->load() != 0; };
+  std::mutex mu;
+  std::condition_variable cv;
+  std::deque<RunRecord> results;
+  std::atomic<size_t> next{0};
+  std::atomic<bool> stop{false};
+  std::vector<std::thread> workers;
+  for (int w = 0; w < n; ++w)
+    workers.emplace_back([&] {
+      for (;;) {
+        const size_t i = next++;
+        if (i >= todo.size() || stop.load() || interrupted()) break;
+        RunRecord rec = run_study_point(spec, todo[i], interrupt);
+        std::lock_guard<std::mutex> g(mu);
+        results.push_back(std::move(rec));
+        cv.notify_one();
+      }
+      RunRecord done;
+      done.index = -1;  // this worker is done
+      std::lock_guard<std::mutex> g(mu);
+      results.push_back(std::move(done));
+      cv.notify_one();
+    });
+  std::string write_error;
+  int running = n;
+  while (running > 0) {
+    std::unique_lock<std::mutex> lk(mu);
+    cv.wait(lk, [&] { return !results.empty(); });
+    while (!results.empty()) {
+      RunRecord rec = std::move(results.front());
+      results.pop_front();
+      lk.unlock();
+      if (rec.index < 0) {
+        --running;
+      } else if (rec.status != "interrupted" && write_error.empty()) {  // interrupted: rerun by --resume
+        try {
+          folder.db().add(folder.runs().at(rec.index), rec, "thread");
+          if (on_record) on_record(rec);
+        } catch (const std::exception& e) {
+          write_error = e.what();
+          stop.store(true);
+        }
+      }
+      lk.lock();
+    }
+  }
+  for (auto& t : workers) t.join();
+  folder.db().export_csv(folder.folder());
+  return write_error;
 }
 
 }  // namespace lash

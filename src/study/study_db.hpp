@@ -4,6 +4,9 @@
 /// one row per finished run with its parameters, status, timing and verdict, its metrics, its
 /// section points and kept series. Each run is written in one transaction (synchronous=FULL),
 /// so a crash or kill -9 loses no finished run and leaves no half one.
+#include <atomic>
+#include <functional>
+#include <memory>
 #include <set>
 #include <string>
 #include <vector>
@@ -63,5 +66,38 @@ struct StudyTable {
 };
 /// Reads a study database (read-only). Throws IoError when it cannot be read.
 StudyTable read_study(const std::string& db_path);
+
+}  // namespace lash
+
+namespace lash {
+
+/// A study's output folder, locked for one sweep: its database opened (created, or with
+/// `resume` reopened and checked to be this study's) and the runs still to do.
+class StudyFolder {
+ public:
+  /// Throws std::invalid_argument when the folder holds a study and `resume` is false, holds
+  /// another study, or is in use by another lash; IoError when it cannot be created or written.
+  StudyFolder(const std::string& folder, const StudySpec& spec, bool resume);
+  const std::vector<StudyRun>& runs() const { return runs_; }
+  const std::vector<StudyRun>& todo() const { return todo_; }
+  int already() const { return static_cast<int>(runs_.size() - todo_.size()); }
+  StudyDb& db() { return *db_; }
+  const std::string& folder() const { return folder_; }
+
+ private:
+  std::string folder_;
+  std::shared_ptr<void> lock_;
+  std::unique_ptr<StudyDb> db_;
+  std::vector<StudyRun> runs_, todo_;
+};
+
+/// Runs `folder`'s remaining runs on `jobs` threads (0: every core), each finished run written to
+/// the database by the calling thread and then passed to `on_record` (for a progress line).
+/// `interrupt` (a signal number once set) stops the runs at their next output; they are not
+/// recorded. Returns "" or the database error that stopped the study (the runs recorded before
+/// it stay). Writes runs.csv and sections.csv at the end either way.
+std::string run_study_threads(StudyFolder& folder, const StudySpec& spec, int jobs,
+                              const std::atomic<int>* interrupt,
+                              const std::function<void(const RunRecord&)>& on_record);
 
 }  // namespace lash
