@@ -249,6 +249,51 @@ TEST(StudyRun, ABadParameterCombinationIsRecordedNotThrown) {
   EXPECT_EQ(back.section_values, good.section_values);
 }
 
+TEST(StudyRun, ContinuationStartsEachRunWhereThePreviousEnded) {
+  // Up then down over one level: run 1 continues run 0 at the same speed, so its journal motion
+  // is that of one uninterrupted run of twice the length, up to the integrator's restart.
+  const StudySpec spec = from_text(
+      "set: {solver.end_time: 0.03, solver.output_interval: 1.0e-4}\n"
+      "parameters:\n  drivers.crank.speed_rpm: {values: [5000]}\n"
+      "continuation: both\ntransient: {periods: 0}\n"
+      "keep: {series: {channels: [rod_slider.ex, rod_slider.ey], points: 100000}}\n");
+  const auto runs = study_runs(spec);
+  ASSERT_EQ(runs.size(), 2u);
+  EXPECT_EQ(runs[0].values, (std::vector<std::string>{"5000", "up"}));
+  EXPECT_EQ(runs[1].values, (std::vector<std::string>{"5000", "down"}));
+  EXPECT_EQ(runs[1].previous, 0);
+  const RunRecord first = run_study_point(spec, runs[0]);
+  ASSERT_EQ(first.status, "completed") << first.message;
+  ASSERT_EQ(first.final_state.y.size() > 0, true);
+  const RunRecord second = run_study_point(spec, runs[1], nullptr, &first);
+  ASSERT_EQ(second.status, "completed") << second.message;
+  EXPECT_NEAR(second.t_reached, 0.06, 1e-12);
+  ASSERT_GT(second.series_time.size(), 20u);
+  EXPECT_NEAR(second.series_time.front(), 0.03, 1e-12);  // the hand-over state itself
+  // The same model run for 0.06 s at once.
+  const StudySpec whole = from_text(
+      "set: {solver.end_time: 0.06, solver.output_interval: 1.0e-4}\n"
+      "parameters:\n  drivers.crank.speed_rpm: {values: [5000]}\ntransient: {periods: 0}\n"
+      "keep: {series: {channels: [rod_slider.ex, rod_slider.ey], points: 100000}}\n");
+  const RunRecord ref = run_study_point(whole, study_runs(whole)[0]);
+  ASSERT_EQ(ref.status, "completed");
+  for (size_t k = 0; k < 10; ++k) {  // the first millisecond after the hand-over
+    const size_t j = 300 + k;        // 0.03 s + k·1e-4 s in the uninterrupted run
+    ASSERT_NEAR(ref.series_time[j], second.series_time[k], 1e-12);
+    EXPECT_NEAR(second.series_values[0][k], ref.series_values[0][j], 1e-8) << "ex at " << ref.series_time[j];
+    EXPECT_NEAR(second.series_values[1][k], ref.series_values[1][j], 1e-8) << "ey at " << ref.series_time[j];
+  }
+  // Another speed: the run starts at t0 = t1·ω1/ω, where the crank has the angle it ended at.
+  const StudySpec faster = from_text(
+      "set: {solver.end_time: 0.03}\nparameters:\n  drivers.crank.speed_rpm: {values: [4000, 5000]}\n"
+      "continuation: up\ntransient: {periods: 1}\n");
+  const auto fr = study_runs(faster);
+  const RunRecord a = run_study_point(faster, fr[0]);
+  const RunRecord b = run_study_point(faster, fr[1], nullptr, &a);
+  ASSERT_EQ(b.status, "completed") << b.message;
+  EXPECT_NEAR(b.t_reached, 0.03 * 4000.0 / 5000.0 + 0.03, 1e-12);
+}
+
 TEST(StudyDatabase, KeepsRunsAndRefusesAnotherStudy) {
   const fs::path dir = temp_dir("db");
   const StudySpec spec = from_text("parameters:\n  drivers.crank.speed_rpm: {values: [1000, fast]}\n");
@@ -359,6 +404,30 @@ TEST(SweepCli, AKilledStudyResumesWithEveryRunExactlyOnce) {
   r = lash_cmd("sweep " + study.string() + " -q --resume -o " + out.string());
   EXPECT_EQ(r.code, 2) << r.out;
   EXPECT_NE(r.out.find("holds the results of another study file"), std::string::npos) << r.out;
+  fs::remove_all(dir);
+}
+
+TEST(SweepCli, AKilledContinuationResumesFromTheRecordedState) {
+  const fs::path dir = temp_dir("continuation");
+  const fs::path study = write_study(
+      dir, "set: {solver.end_time: 0.06, solver.output_interval: 1.0e-4}\n"
+           "parameters:\n  drivers.crank.speed_rpm: {from: 3000, to: 5000, count: 8}\n"
+           "continuation: up\ntransient: {periods: 1}\nkeep: {sections: [rod_slider.ex]}\n");
+  ASSERT_EQ(lash_cmd("sweep " + study.string() + " -q -o " + (dir / "ref").string()).code, 0);
+  const fs::path out = dir / "out";
+  const pid_t pid = spawn_sweep(study, out);
+  wait_for_runs(out / "study.db", 2);
+  kill(pid, SIGKILL);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  ASSERT_TRUE(WIFSIGNALED(status)) << "the study ended before the kill";
+  const Result r = lash_cmd("sweep " + study.string() + " -q --resume -o " + out.string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  // The chain went on from the state the database kept: the same runs as without the kill.
+  const std::string q = "select run, \"drivers.crank.speed_rpm\", direction, status, t_reached, steps from runs order by run";
+  EXPECT_EQ(query(out / "study.db", q), query(dir / "ref" / "study.db", q));
+  EXPECT_EQ(query(out / "study.db", "select * from sections order by run, k"),
+            query(dir / "ref" / "study.db", "select * from sections order by run, k"));
   fs::remove_all(dir);
 }
 

@@ -194,6 +194,11 @@ int SweepCommand::run(std::atomic<int>& interrupt, const std::function<void()>& 
     std::cerr << "error: " << e.what() << "\n";
     code = kExitBadInput;
   }
+  if (code < 0 && size > 1 && !spec.continuation.empty()) {
+    std::cerr << "error: " << study_ << ": continuation runs each chain one run after another on "
+                 "one machine; run it without mpirun\n";
+    code = kExitBadInput;
+  }
   if (code < 0) {
     nlohmann::json models = nlohmann::json::object();
     for (const auto& [p, t] : spec.model_texts) models[p] = t;

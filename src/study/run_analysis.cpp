@@ -356,7 +356,9 @@ void check_options(const AnalysisOptions& o) {
 
 RunAnalysis analyze_run(const Model& model, const AnalysisOptions& o, Observer* extra) {
   const SolverSettings& s = model.solver;
-  const size_t n_out = static_cast<size_t>(std::ceil(s.end_time / s.output_interval - 1e-9)) + 1;
+  const double t_start = o.from ? o.from->t : 0.0;
+  const size_t n_out =
+      static_cast<size_t>(std::ceil((s.end_time - t_start) / s.output_interval - 1e-9)) + 1;
   const size_t bucket = (n_out + o.display_points - 1) / o.display_points;
 
   // The options first: nothing runs when one of them is out of range or names what does not exist.
@@ -372,7 +374,7 @@ RunAnalysis analyze_run(const Model& model, const AnalysisOptions& o, Observer* 
   if (!std::isnan(o.stats_angle0) && !drv)
     throw std::invalid_argument("--angle-range needs a constant-speed revolute driver");
   const double period = drv ? 2 * M_PI / std::abs(drv->speed) : 0.0;
-  const double t_discard = period > 0 ? o.discard_periods * period : 0.0;
+  const double t_discard = t_start + (period > 0 ? o.discard_periods * period : 0.0);
 
   Workspace ws(model);
   const std::vector<ChannelInfo> channels = channel_info(model, ws);
@@ -418,7 +420,7 @@ RunAnalysis analyze_run(const Model& model, const AnalysisOptions& o, Observer* 
   const Model twin_model = ideal_model(model);
   std::unique_ptr<Keeper> twin;
   RunResult twin_result;
-  if (o.ideal_twin && model.clearance_joint_count() > 0) {
+  if (o.ideal_twin && !o.from && model.clearance_joint_count() > 0) {
     Workspace tws(twin_model);
     twin = std::make_unique<Keeper>(twin_model);
     RunOptions ro;
@@ -451,6 +453,7 @@ RunAnalysis analyze_run(const Model& model, const AnalysisOptions& o, Observer* 
   RunAnalysis out;
   RunOptions run_options;
   run_options.interrupt = o.interrupt;
+  run_options.from = o.from;
   out.result = simulate(model, ws, col, SectionSchedule{planes.empty() ? period : 0.0, 0.0}, planes,
                         run_options);
   col.dec.flush();
@@ -536,7 +539,7 @@ RunAnalysis analyze_run(const Model& model, const AnalysisOptions& o, Observer* 
     ja.clearance = jt.clearance->clearance;
     ja.orbit = std::move(col.orbit[c]);
     ja.continuous_contact_time = cont_time;
-    ja.modes = contact_modes(je.t, je.onset, je.v, je.in_contact_at_start, 0.0, t_end, cont_time);
+    ja.modes = contact_modes(je.t, je.onset, je.v, je.in_contact_at_start, t_start, t_end, cont_time);
     // Histogram of impact velocities: 12 bins from 0 to the largest.
     double vmax = 0;
     for (double v : ja.modes.impact_velocities) vmax = std::max(vmax, v);
@@ -560,7 +563,7 @@ RunAnalysis analyze_run(const Model& model, const AnalysisOptions& o, Observer* 
   // rate seen so far.
   double verdict_period = period, min_end_time = 0.0;
   if (period > 0 && planes.empty()) {
-    min_end_time = (kVerdictMinSections - 1 + o.discard_periods) * period;
+    min_end_time = t_start + (kVerdictMinSections - 1 + o.discard_periods) * period;
   } else if (n_sections >= 2) {
     verdict_period = (col.section_t.back() - col.section_t.front()) / (n_sections - 1);
     min_end_time = t_discard + (kVerdictMinSections + 1) * verdict_period;

@@ -42,6 +42,9 @@ struct AnalysisOptions {
   double stats_angle0 = std::nan(""), stats_angle1 = std::nan("");
   /// Checked at every output of the runs (RunOptions::interrupt): a signal stops them there.
   const std::atomic<int>* interrupt = nullptr;
+  /// Continue from this state (RunOptions::from) instead of the initial state: the transient is
+  /// counted from its time, and there is no ideal twin (it would start elsewhere).
+  const State* from = nullptr;
 };
 
 /// Throws std::invalid_argument naming the option (as the command line spells it) when one is

@@ -115,7 +115,7 @@ std::string model_texts_json(const StudySpec& spec) {
 }  // namespace
 
 StudyDb::StudyDb(const std::string& path, const StudySpec& spec, int total_runs) : path_(path) {
-  for (const auto& p : spec.parameters) parameters_.push_back(p.name);
+  parameters_ = parameter_columns(spec);
   if (sqlite3_open_v2(path.c_str(), &db_, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE, nullptr) != SQLITE_OK) {
     const std::string msg = db_ ? sqlite3_errmsg(db_) : "out of memory";
     sqlite3_close(db_);
@@ -149,6 +149,7 @@ StudyDb::StudyDb(const std::string& path, const StudySpec& spec, int total_runs)
       exec("CREATE INDEX sections_run ON sections(run)");
       exec("CREATE TABLE series(run INTEGER NOT NULL, channel TEXT NOT NULL, time TEXT NOT NULL, "
            "value TEXT NOT NULL)");
+      exec("CREATE TABLE states(run INTEGER PRIMARY KEY, driver_speed REAL, state TEXT NOT NULL)");
       Stmt st(db_, "INSERT INTO study(key, value) VALUES(?, ?)", path_);
       const std::map<std::string, std::string> info = {
           {"schema_version", std::to_string(kSchemaVersion)},
@@ -233,11 +234,35 @@ void StudyDb::add(const StudyRun& run, const RunRecord& r, const std::string& wo
     for (size_t c = 0; c < r.series_channels.size(); ++c)
       ser.bind(1, static_cast<long>(r.index)).bind(2, r.series_channels[c]).bind(3, times)
           .bind(4, nlohmann::json(r.series_values[c]).dump()).run();
+    if (r.final_state.y.size() > 0) {  // continuation: the next run starts here
+      Stmt st(db_, "INSERT INTO states(run, driver_speed, state) VALUES(?, ?, ?)", path_);
+      st.bind(1, static_cast<long>(r.index)).bind(2, r.driver_speed)
+          .bind(3, state_json(r.final_state).dump()).run();
+    }
     exec("COMMIT");
   } catch (...) {
     sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr);
     throw;
   }
+}
+
+RunRecord StudyDb::recorded(int run) const {
+  RunRecord r;
+  r.index = run;
+  {
+    Stmt s(db_, "SELECT status, message FROM runs WHERE run = ?", path_);
+    s.bind(1, static_cast<long>(run));
+    if (!s.step()) throw std::invalid_argument(path_ + ": no run " + std::to_string(run));
+    r.status = s.text(0);
+    r.message = s.text(1);
+  }
+  Stmt s(db_, "SELECT driver_speed, state FROM states WHERE run = ?", path_);
+  s.bind(1, static_cast<long>(run));
+  if (s.step()) {
+    r.driver_speed = s.number(0);
+    r.final_state = state_from_json(nlohmann::json::parse(s.text(1)));
+  }
+  return r;
 }
 
 void StudyDb::export_csv(const std::string& folder) const {
@@ -368,9 +393,25 @@ std::string run_study_threads(StudyFolder& folder, const StudySpec& spec, int jo
                               const std::function<void(const RunRecord&)>& on_record) {
   // Threads: one study, one model text, a model and workspace per run; the database is written
   // by the calling thread only.
+  // Work units: single runs, or in a continuation study chains of runs, each starting from the
+  // one before (from the database when that one was recorded by an earlier, interrupted sweep).
   const auto& todo = folder.todo();
+  std::vector<std::vector<const StudyRun*>> units;
+  for (const auto& r : todo) {
+    if (!units.empty() && r.previous >= 0 && units.back().back()->index == r.previous)
+      units.back().push_back(&r);
+    else
+      units.push_back({&r});
+  }
+  std::vector<RunRecord> chain_start(units.size());  // the recorded run a chain continues
+  std::vector<bool> has_start(units.size(), false);
+  for (size_t u = 0; u < units.size(); ++u)
+    if (units[u].front()->previous >= 0) {
+      chain_start[u] = folder.db().recorded(units[u].front()->previous);
+      has_start[u] = true;
+    }
   const int n = std::max(1, std::min<int>(jobs > 0 ? jobs : static_cast<int>(std::thread::hardware_concurrency()),
-                                          static_cast<int>(todo.size())));
+                                          static_cast<int>(units.size())));
   auto interrupted = [&] { return interrupt && interrupt->load() != 0; };
   std::mutex mu;
   std::condition_variable cv;
@@ -381,12 +422,26 @@ std::string run_study_threads(StudyFolder& folder, const StudySpec& spec, int jo
   for (int w = 0; w < n; ++w)
     workers.emplace_back([&] {
       for (;;) {
-        const size_t i = next++;
-        if (i >= todo.size() || stop.load() || interrupted()) break;
-        RunRecord rec = run_study_point(spec, todo[i], interrupt);
-        std::lock_guard<std::mutex> g(mu);
-        results.push_back(std::move(rec));
-        cv.notify_one();
+        const size_t u = next++;
+        if (u >= units.size() || stop.load() || interrupted()) break;
+        RunRecord before;
+        bool have_before = has_start[u];
+        if (have_before) before = chain_start[u];
+        for (const StudyRun* run : units[u]) {
+          if (stop.load() || interrupted()) break;
+          RunRecord rec = run_study_point(spec, *run, interrupt, have_before ? &before : nullptr);
+          const bool go_on = rec.status != "interrupted";
+          if (go_on) {
+            before = rec;  // the chain's next run starts where this one ended
+            have_before = true;
+          }
+          {
+            std::lock_guard<std::mutex> g(mu);
+            results.push_back(std::move(rec));
+            cv.notify_one();
+          }
+          if (!go_on) break;
+        }
       }
       RunRecord done;
       done.index = -1;  // this worker is done

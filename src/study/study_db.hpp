@@ -30,6 +30,8 @@ class StudyDb {
   std::set<int> finished() const;
   /// Records one run with its parameters, in one transaction. Throws IoError on failure.
   void add(const StudyRun& run, const RunRecord& record, const std::string& worker);
+  /// A recorded run's status, message and (continuation studies) final state and driver speed.
+  RunRecord recorded(int run) const;
 
   /// Writes runs.csv (one row per run: parameters, status, verdict, timing and every metric) and
   /// sections.csv (one row per section point) beside the database, each atomically.

@@ -243,7 +243,7 @@ StudySpec load_study_text(const std::string& text, const std::string& file,
   if (!root.IsMap())
     throw ModelError({{file, 1, 1, "", "expected a study (a map with study, model, parameters, ...)"}});
   r.keys(root, {"study", "model", "set", "parameters", "combine", "sampling", "keep", "transient",
-                "lyapunov"},
+                "lyapunov", "continuation"},
          "study");
   spec.name = root["study"] && root["study"].IsScalar() ? root["study"].Scalar() : "study";
   if (!root["model"] || !root["model"].IsScalar()) {
@@ -354,6 +354,23 @@ StudySpec load_study_text(const std::string& text, const std::string& file,
     if (l.Scalar() != "true" && l.Scalar() != "false") r.error(l, "lyapunov: expected true or false");
     spec.lyapunov = l.Scalar() == "true";
   }
+  if (const YAML::Node c = root["continuation"]) {
+    spec.continuation = c.IsScalar() ? c.Scalar() : std::string("?");
+    if (spec.continuation == "none") spec.continuation.clear();
+    if (!spec.continuation.empty() && spec.continuation != "up" && spec.continuation != "down" &&
+        spec.continuation != "both")
+      r.error(c, "continuation: expected none, up, down or both, got '" + spec.continuation + "'");
+    else if (!spec.continuation.empty() &&
+             (spec.parameters.size() != 1 || spec.parameters[0].sampled ||
+              !spec.parameters[0].case_overrides.empty()))
+      r.error(c, "continuation: needs exactly one parameter with listed levels (values or "
+                 "from/to/count), run in order");
+    else if (!spec.continuation.empty())
+      for (const auto& p : spec.parameters) {
+        if (p.name == "direction")
+          r.error(c, "continuation: a parameter named 'direction' would clash with the run's direction column");
+      }
+  }
   if (!r.list.empty()) throw ModelError(r.list);
 
   // How many runs: refused past kMaxRuns before anything is listed.
@@ -436,7 +453,36 @@ StudySpec load_study_file(const std::string& file) {
   });
 }
 
+std::vector<std::string> parameter_columns(const StudySpec& spec) {
+  std::vector<std::string> out;
+  for (const auto& p : spec.parameters) out.push_back(p.name);
+  if (!spec.continuation.empty()) out.push_back("direction");
+  return out;
+}
+
 std::vector<StudyRun> study_runs(const StudySpec& spec) {
+  if (!spec.continuation.empty()) {  // one parameter; chains up and/or down, each run after the one before
+    const StudyParameter& p = spec.parameters.front();
+    std::vector<StudyRun> runs;
+    for (const std::string dir : {"up", "down"}) {
+      if (spec.continuation != "both" && spec.continuation != dir) continue;
+      const size_t n = p.values.size();
+      for (size_t k = 0; k < n; ++k) {
+        const size_t level = dir == "up" ? k : n - 1 - k;
+        StudyRun run;
+        run.index = static_cast<int>(runs.size());
+        run.model = spec.model;
+        run.overrides = spec.fixed;
+        run.values = {p.values[level], dir};
+        run.numbers = {p.numbers[level], std::nan("")};
+        run.overrides.push_back(p.name + "=" + p.values[level]);
+        // Down after up continues from the top: the whole study is one chain.
+        run.previous = k == 0 && (dir == "up" || spec.continuation == "down") ? -1 : run.index - 1;
+        runs.push_back(std::move(run));
+      }
+    }
+    return runs;
+  }
   const size_t np = spec.parameters.size();
   // Level index of each parameter, per run; sampled parameters carry the drawn value instead.
   std::vector<std::vector<size_t>> levels;
@@ -556,7 +602,8 @@ class Keep : public Observer {
 
 }  // namespace
 
-RunRecord run_study_point(const StudySpec& spec, const StudyRun& run, const std::atomic<int>* interrupt) {
+RunRecord run_study_point(const StudySpec& spec, const StudyRun& run, const std::atomic<int>* interrupt,
+                          const RunRecord* previous) {
   RunRecord rec;
   rec.index = run.index;
   const auto start = std::chrono::steady_clock::now();
@@ -564,16 +611,42 @@ RunRecord run_study_point(const StudySpec& spec, const StudyRun& run, const std:
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   };
   try {
-    const LoadedModel lm = load_model_text(spec.model_texts.at(run.model), run.model, run.overrides);
+    LoadedModel lm = load_model_text(spec.model_texts.at(run.model), run.model, run.overrides);
+    const Driver* drv = period_driver(lm.model, "");
+    // Continuation: start where the previous run ended. The driver's angle there, φ₁ = φ₀ + ω₁t₁,
+    // is reached at the new speed at t₀ = t₁·ω₁/ω; the run lasts end_time from there.
+    std::optional<State> from;
+    if (previous) {
+      if (previous->final_state.y.size() == 0)
+        throw std::invalid_argument("run " + std::to_string(run.previous) +
+                                    ", which this run continues, has no final state (" +
+                                    previous->status + ")");
+      if (!drv || drv->profile != DriverProfile::constant_speed || previous->driver_speed == 0.0 ||
+          drv->speed * previous->driver_speed <= 0.0)
+        throw std::invalid_argument("continuation needs a constant-speed rotary driver turning the "
+                                    "same way in every run");
+      const double t0 = previous->final_state.t * previous->driver_speed / drv->speed;
+      std::vector<std::string> ov = run.overrides;
+      ov.push_back("solver.end_time=" + number_text(t0 + lm.model.solver.end_time));
+      lm = load_model_text(spec.model_texts.at(run.model), run.model, ov);
+      drv = period_driver(lm.model, "");
+      from = previous->final_state;
+      from->t = t0;
+      from->step = 0.0;
+      Workspace pw(lm.model);
+      project_state(lm.model, pw, t0, from->y);  // the new speed's velocity constraints
+    }
     const Model& model = lm.model;
-    const Driver* drv = period_driver(model, "");
+    const double t_begin = from ? from->t : 0.0;
     const double period = drv ? 2 * M_PI / std::abs(drv->speed) : 0.0;
-    const double t_transient = period > 0 ? spec.discard_periods * period : std::max(0.0, spec.discard_time);
+    const double t_transient =
+        t_begin + (period > 0 ? spec.discard_periods * period : std::max(0.0, spec.discard_time));
     if (t_transient >= model.solver.end_time)
-      throw std::invalid_argument("the transient (" + number_text(t_transient) +
-                                  " s) is not shorter than end_time (" +
-                                  number_text(model.solver.end_time) + " s)");
+      throw std::invalid_argument("the transient (" + number_text(t_transient - t_begin) +
+                                  " s) is not shorter than the run (" +
+                                  number_text(model.solver.end_time - t_begin) + " s)");
     AnalysisOptions ao;
+    ao.from = from ? &*from : nullptr;
     ao.ideal_twin = false;
     ao.lyapunov = spec.lyapunov;
     ao.discard_periods = spec.discard_periods;
@@ -594,6 +667,10 @@ RunRecord run_study_point(const StudySpec& spec, const StudyRun& run, const std:
       rec.message = res.status.message;
       rec.wall_seconds = elapsed();
       return rec;
+    }
+    if (!spec.continuation.empty()) {
+      rec.final_state = res.final_state;
+      rec.driver_speed = drv ? drv->speed : 0.0;
     }
     rec.status = res.status.ok ? "completed" : "failed";
     rec.message = res.status.ok ? "" : res.status.message;
@@ -635,6 +712,25 @@ RunRecord run_study_point(const StudySpec& spec, const StudyRun& run, const std:
   return rec;
 }
 
+nlohmann::json state_json(const State& st) {
+  if (st.y.size() == 0) return nullptr;
+  std::vector<bool> modes;
+  for (const auto& m : st.modes) modes.push_back(m.in_contact);
+  return {{"t", st.t}, {"y", std::vector<double>(st.y.data(), st.y.data() + st.y.size())},
+          {"in_contact", modes}, {"step", st.step}};
+}
+
+State state_from_json(const nlohmann::json& j) {
+  State st;
+  if (j.is_null()) return st;
+  st.t = j.at("t");
+  const auto y = j.at("y").get<std::vector<double>>();
+  st.y = Eigen::Map<const Eigen::VectorXd>(y.data(), static_cast<Eigen::Index>(y.size()));
+  for (bool c : j.at("in_contact").get<std::vector<bool>>()) st.modes.push_back(ContactState{c});
+  st.step = j.at("step");
+  return st;
+}
+
 nlohmann::json to_json(const RunRecord& r) {
   nlohmann::json m = nlohmann::json::array();
   for (const auto& [k, v] : r.metrics) m.push_back({k, v});
@@ -653,7 +749,9 @@ nlohmann::json to_json(const RunRecord& r) {
           {"section_values", r.section_values},
           {"series_channels", r.series_channels},
           {"series_time", r.series_time},
-          {"series_values", r.series_values}};
+          {"series_values", r.series_values},
+          {"final_state", state_json(r.final_state)},
+          {"driver_speed", r.driver_speed}};
 }
 
 RunRecord record_from_json(const nlohmann::json& j) {
@@ -674,6 +772,8 @@ RunRecord record_from_json(const nlohmann::json& j) {
   r.series_channels = j.at("series_channels").get<std::vector<std::string>>();
   r.series_time = j.at("series_time").get<std::vector<double>>();
   r.series_values = j.at("series_values").get<std::vector<std::vector<double>>>();
+  r.final_state = state_from_json(j.at("final_state"));
+  r.driver_speed = j.at("driver_speed");
   return r;
 }
 

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "core/simulate.hpp"
 #include "nlohmann/json.hpp"
 
 namespace lash {
@@ -47,6 +48,9 @@ struct StudySpec {
   int discard_periods = 5;           ///< transient: periods of the period driver skipped
   double discard_time = -1.0;        ///< transient in s when the model has no period driver
   bool lyapunov = false;
+  /// "", up, down or both: each run starts from the previous run's final state (one parameter,
+  /// its levels in order; both: up, then down), to reveal hysteresis. docs/studies.md.
+  std::string continuation;
 };
 
 /// Reads `text`, the study file `file`; `read(path)` returns the text of a model file it names
@@ -65,7 +69,12 @@ struct StudyRun {
   std::vector<double> numbers;        ///< per parameter, NaN for text
   std::string model;                  ///< model file
   std::vector<std::string> overrides; ///< fixed ones first
+  int previous = -1;                  ///< continuation: the run whose final state this one starts from
 };
+/// The columns a run's parameter values fill (StudyRun::values): the parameters' names, and
+/// "direction" (up/down) in a continuation study.
+std::vector<std::string> parameter_columns(const StudySpec& spec);
+
 /// Every run of the study, in index order. Sampled parameters are drawn from `seed` with a
 /// generator whose sequence is fixed here (not the standard library's distributions), so a study
 /// gives the same runs on every machine.
@@ -87,14 +96,25 @@ struct RunRecord {
   std::vector<std::string> series_channels;
   std::vector<double> series_time;
   std::vector<std::vector<double>> series_values;  ///< [channel][sample]
+  /// Continuation studies: where the run ended (the next run starts there) and the period
+  /// driver's speed it ran at (rad/s). Empty y: not kept.
+  State final_state;
+  double driver_speed = 0.0;
 };
 nlohmann::json to_json(const RunRecord& r);
+/// A State as JSON (null when empty), doubles exactly; and back.
+nlohmann::json state_json(const State& state);
+State state_from_json(const nlohmann::json& j);
 RunRecord record_from_json(const nlohmann::json& j);
 
 /// Runs one point of the study. Never throws for a bad parameter combination or a failing run:
 /// the record says what happened. `interrupt` (a signal number when set) stops the run at its
 /// next output; the record is then "interrupted" and must not be kept.
+/// With `previous` (a continuation study), the run starts from the previous run's final state:
+/// at the time t₀ = t₁·ω₁/ω where the constant-speed driver's angle is the one it ended at, its
+/// velocities projected onto the new speed's constraints, and runs for end_time from there.
 RunRecord run_study_point(const StudySpec& spec, const StudyRun& run,
-                          const std::atomic<int>* interrupt = nullptr);
+                          const std::atomic<int>* interrupt = nullptr,
+                          const RunRecord* previous = nullptr);
 
 }  // namespace lash
