@@ -49,12 +49,25 @@ std::vector<double> ticks(double a, double b) {
 }
 
 /// A scatter (dots) or line plot as an SVG element.
+/// Colours of the groups (a text parameter's values), colour-blind safe (Okabe–Ito).
+const char* kColours[] = {"#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9", "#000000"};
+
+/// A scatter (dots) or line plot as an SVG element; `group[i]` picks point i's colour and line
+/// (one line per group), `groups` names them in a legend (none with fewer than two).
 std::string plot(const std::string& title, const std::string& xlabel, const std::string& ylabel,
-                 const std::vector<std::pair<double, double>>& pts, bool line, bool log_x) {
+                 const std::vector<std::pair<double, double>>& pts, bool line, bool log_x,
+                 const std::vector<int>& group = {}, const std::vector<std::string>& groups = {}) {
   const double W = 640, H = 360, L = 70, R = 16, T = 30, B = 48;
   std::vector<std::pair<double, double>> p;
-  for (const auto& [x, y] : pts)
-    if (std::isfinite(x) && std::isfinite(y) && (!log_x || x > 0)) p.push_back({log_x ? std::log10(x) : x, y});
+  std::vector<int> g;
+  for (size_t i = 0; i < pts.size(); ++i) {
+    const auto [x, y] = pts[i];
+    if (std::isfinite(x) && std::isfinite(y) && (!log_x || x > 0)) {
+      p.push_back({log_x ? std::log10(x) : x, y});
+      g.push_back(group.empty() ? 0 : group[i]);
+    }
+  }
+  const int n_groups = std::max<int>(1, static_cast<int>(groups.size()));
   std::ostringstream s;
   s << "<figure><svg viewBox=\"0 0 " << W << " " << H << "\" role=\"img\"><title>" << esc(title)
     << "</title>";
@@ -86,17 +99,30 @@ std::string plot(const std::string& title, const std::string& xlabel, const std:
     << "</text>";
   s << "<text transform=\"translate(14," << (T + H - B) / 2 << ") rotate(-90)\" text-anchor=\"middle\">"
     << esc(ylabel) << "</text>";
-  if (line) {
-    auto q = p;
-    std::sort(q.begin(), q.end());
-    s << "<polyline class=\"line\" points=\"";
-    for (const auto& [x, y] : q) s << fmt::format("{:.1f},{:.1f} ", X(x), Y(y));
-    s << "\"/>";
-  }
-  s << "<g class=\"dots\">";
   const double r = line ? 2.5 : (p.size() > 5000 ? 0.8 : 1.4);
-  for (const auto& [x, y] : p) s << fmt::format("<circle cx=\"{:.1f}\" cy=\"{:.1f}\" r=\"{}\"/>", X(x), Y(y), r);
-  s << "</g></svg></figure>";
+  for (int k = 0; k < n_groups; ++k) {
+    const char* colour = kColours[k % 7];
+    if (line) {
+      std::vector<std::pair<double, double>> q;
+      for (size_t i = 0; i < p.size(); ++i)
+        if (g[i] == k) q.push_back(p[i]);
+      std::sort(q.begin(), q.end());
+      s << "<polyline class=\"line\" style=\"stroke:" << colour << "\" points=\"";
+      for (const auto& [x, y] : q) s << fmt::format("{:.1f},{:.1f} ", X(x), Y(y));
+      s << "\"/>";
+    }
+    s << "<g class=\"dots\" style=\"fill:" << colour << "\">";
+    for (size_t i = 0; i < p.size(); ++i)
+      if (g[i] == k)
+        s << fmt::format("<circle cx=\"{:.1f}\" cy=\"{:.1f}\" r=\"{}\"/>", X(p[i].first), Y(p[i].second), r);
+    s << "</g>";
+  }
+  if (groups.size() > 1)
+    for (size_t k = 0; k < groups.size(); ++k)
+      s << "<circle cx=\"" << L + 12 << "\" cy=\"" << T + 12 + 14 * k << "\" r=\"4\" style=\"fill:"
+        << kColours[k % 7] << "\"/><text x=\"" << L + 20 << "\" y=\"" << T + 16 + 14 * k << "\">"
+        << esc(groups[k]) << "</text>";
+  s << "</svg></figure>";
   return s.str();
 }
 
@@ -134,8 +160,8 @@ std::string write_study_report(const std::string& folder) {
     << " — lash study</title><style>"
        "body{font:15px/1.45 system-ui,sans-serif;margin:2em auto;max-width:1320px;padding:0 1em;color:#1d2530}"
        "h1{font-size:1.6em;margin-bottom:.2em}h2{font-size:1.2em;margin-top:2em;border-bottom:1px solid #d5dbe3}"
-       ".grid{stroke:#e7ebf0}.frame{fill:none;stroke:#9aa5b1}.dots circle{fill:#2160c4;fill-opacity:.75}"
-       ".line{fill:none;stroke:#2160c4;stroke-width:1.4}svg{width:100%;max-width:640px;font-size:11px}"
+       ".grid{stroke:#e7ebf0}.frame{fill:none;stroke:#9aa5b1}.dots circle{fill-opacity:.75}"
+       ".line{fill:none;stroke-width:1.4}svg{width:100%;max-width:640px;font-size:11px}"
        ".t{font-size:13px;font-weight:600}figure{display:inline-block;margin:.5em;width:640px;max-width:100%}"
        "table{border-collapse:collapse;font-size:13px}td,th{padding:.25em .6em;border-bottom:1px solid #e7ebf0;text-align:left}"
        "td.n{text-align:right;font-variant-numeric:tabular-nums}.muted{color:#5b6673}"
@@ -149,14 +175,32 @@ std::string write_study_report(const std::string& folder) {
     const std::string xlabel = t.parameters[xp];
     std::map<int, double> x_of;
     for (const auto& row : t.rows) x_of[row.run] = row.numbers[xp];
+    // Colours: the values of the first text parameter (a case, or the continuation's direction).
+    int gp = -1;
+    for (size_t p = 0; p < t.parameters.size() && gp < 0; ++p)
+      if (!t.rows.empty() && std::isnan(t.rows.front().numbers[p])) gp = static_cast<int>(p);
+    std::vector<std::string> groups;
+    std::map<int, int> group_of;
+    for (const auto& row : t.rows) {
+      int k = 0;
+      if (gp >= 0) {
+        const auto it = std::find(groups.begin(), groups.end(), row.values[gp]);
+        k = static_cast<int>(it - groups.begin());
+        if (it == groups.end()) groups.push_back(row.values[gp]);
+      }
+      group_of[row.run] = k;
+    }
+    if (gp < 0) groups.clear();
     if (!t.section_channels.empty()) {
       h << "<h2>Bifurcation diagram</h2><p class=\"muted\">Each run's chosen channel at every "
            "Poincaré section after the transient, over <code>"
         << esc(xlabel) << "</code>: one dot per period for a period-1 orbit, k for period k, a cloud for chaos.</p>";
       for (size_t c = 0; c < t.section_channels.size(); ++c) {
         std::vector<std::pair<double, double>> pts;
-        for (const auto& [run, v] : t.points[c]) pts.push_back({x_of[run], v});
-        h << plot(t.section_channels[c] + " at the sections", xlabel, t.section_channels[c], pts, false, log_x);
+        std::vector<int> g;
+        for (const auto& [run, v] : t.points[c]) pts.push_back({x_of[run], v}), g.push_back(group_of[run]);
+        h << plot(t.section_channels[c] + " at the sections", xlabel, t.section_channels[c], pts, false,
+                  log_x, g, groups);
       }
     }
     // Metrics against the parameter: peaks, impacts, contact shares, the exponent.
@@ -166,13 +210,15 @@ std::string write_study_report(const std::string& folder) {
         if (std::find(names.begin(), names.end(), n) == names.end() && plotted_metric(n))
           names.push_back(n);
     if (!names.empty()) h << "<h2>Metrics</h2>";
-    const bool several = t.parameters.size() > 1;
+    // Lines when the numeric parameter alone (with the colour's) tells the runs apart.
+    const bool several = t.parameters.size() > (gp >= 0 ? 2u : 1u);
     for (const auto& n : names) {
       std::vector<std::pair<double, double>> pts;
+      std::vector<int> g;
       for (const auto& row : t.rows)
         for (const auto& [m, v] : row.metrics)
-          if (m == n) pts.push_back({row.numbers[xp], v});
-      h << plot(n, xlabel, n, pts, !several, log_x);
+          if (m == n) pts.push_back({row.numbers[xp], v}), g.push_back(group_of[row.run]);
+      h << plot(n, xlabel, n, pts, !several, log_x, g, groups);
     }
   }
 
