@@ -216,6 +216,30 @@ TEST(StudyFile, ProblemsAreLocatedInTheStudyFile) {
             std::string::npos);
   EXPECT_NE(problems("parameters:\n  drivers.crank.speed_rpm: {min: 1, max: 2}\n").find("add sampling"),
             std::string::npos);
+  // Duplicate keys: refused with both places, as in model files.
+  const std::string dup = problems("transient: {periods: 1}\ntransient: {periods: 2}\nparameters:\n"
+                                   "  drivers.crank.speed_rpm: {values: [1000]}\n");
+  EXPECT_NE(dup.find("duplicate key 'transient'"), std::string::npos) << dup;
+  // A transient in periods needs a constant-speed driver; one longer than the run is refused.
+  std::string model = lash::test::read_file(example());
+  model.replace(model.find("speed_rpm: 5000"), 15, "speed: 'step5(time, 0, 0, 0.005, 500)'");
+  const fs::path ramp_model = fs::temp_directory_path() / ("lash_sweep_ramp_" + std::to_string(getpid()) + ".yaml");
+  std::ofstream(ramp_model) << model;
+  std::string ramp;
+  try {
+    load_study_text("study: ramp\nmodel: " + ramp_model.string() +
+                        "\nparameters:\n  joints.rod_slider.clearance: {values: [2.0e-4]}\n"
+                        "transient: {periods: 2}\ncontinuation: up\n",
+                    "s.yaml", [](const std::string& p) { return lash::test::read_file(p); });
+  } catch (const ModelError& e) {
+    ramp = e.what();
+  }
+  fs::remove(ramp_model);
+  EXPECT_NE(ramp.find("s.yaml:5:12: transient: periods needs a constant-speed rotary driver"), std::string::npos) << ramp;
+  EXPECT_NE(ramp.find("s.yaml:6:15: continuation: needs a constant-speed rotary driver"), std::string::npos) << ramp;
+  // Metric-like parameter names would share runs.csv's columns with the metrics.
+  EXPECT_NE(problems("parameters:\n  rod_slider.Fn.peak: {cases: {a: {}}}\n").find("named like a metric"),
+            std::string::npos);
   // Parameters are database columns: no duplicates, none named like a run's own columns.
   EXPECT_NE(problems("parameters:\n  status: {cases: {a: {}, b: {}}}\n").find("s.yaml:4:3: parameter 'status': a name every run's row has"),
             std::string::npos) << problems("parameters:\n  status: {cases: {a: {}, b: {}}}\n");
@@ -283,6 +307,15 @@ TEST(StudyRun, ContinuationStartsEachRunWhereThePreviousEnded) {
     EXPECT_NEAR(second.series_values[0][k], ref.series_values[0][j], 1e-8) << "ex at " << ref.series_time[j];
     EXPECT_NEAR(second.series_values[1][k], ref.series_values[1][j], 1e-8) << "ey at " << ref.series_time[j];
   }
+  // Over the clearance the hand-over would put the journal deep into a smaller bearing: refused.
+  const StudySpec shrink = from_text(
+      "set: {solver.end_time: 0.03}\nparameters:\n  joints.rod_slider.clearance: {values: [5.0e-4, 1.0e-5]}\n"
+      "continuation: up\ntransient: {periods: 1}\n");
+  const auto sr = study_runs(shrink);
+  const RunRecord big = run_study_point(shrink, sr[0]);
+  const RunRecord small = run_study_point(shrink, sr[1], nullptr, &big);
+  EXPECT_EQ(small.status, "error");
+  EXPECT_NE(small.message.find("into this run's bearing"), std::string::npos) << small.message;
   // Another speed: the run starts at t0 = t1·ω1/ω, where the crank has the angle it ended at.
   const StudySpec faster = from_text(
       "set: {solver.end_time: 0.03}\nparameters:\n  drivers.crank.speed_rpm: {values: [4000, 5000]}\n"
@@ -470,6 +503,11 @@ TEST(SweepCli, AFailingRunIsRecordedAndTheRestComplete) {
            "  solver.max_steps: {values: [1000000, 1000000, 50, 1000000]}\n"
            "transient: {periods: 1}\n");
   Result r = lash_cmd("sweep " + study.string() + " -o " + (dir / "out").string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("4 runs in"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("(2 failed)"), std::string::npos) << r.out;
+  // Resumed, nothing runs and the closing line still counts the failures the database holds.
+  r = lash_cmd("sweep " + study.string() + " --resume -o " + (dir / "out").string());
   ASSERT_EQ(r.code, 0) << r.out;
   EXPECT_NE(r.out.find("4 runs in"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("(2 failed)"), std::string::npos) << r.out;

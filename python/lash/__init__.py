@@ -423,6 +423,8 @@ class Study:
         return len(self.rows)
 
     def __getitem__(self, column: str) -> np.ndarray:
+        if self.rows and not any(column in row for row in self.rows):
+            raise KeyError(f"{column!r}: no run has it; columns: {sorted(set().union(*self.rows))}")
         values = [row.get(column, math.nan) for row in self.rows]
         if all(isinstance(v, (int, float)) for v in values):
             return np.asarray(values, dtype=float)
@@ -449,6 +451,10 @@ def sweep(study: str | os.PathLike, output: str | os.PathLike, *, jobs: int = 0,
     be written. Ctrl-C stops the runs at their next output; the finished ones stay recorded and
     `resume=True` runs the rest.
     """
+    if jobs < 0:
+        raise ValueError(f"jobs={jobs}: expected 0 (every core) or a positive number")
+    if not os.fspath(output):
+        raise ValueError("output: expected a folder name")
     _lash.sweep(os.fspath(study), os.fspath(output), jobs, resume)
     return Study(os.path.join(os.fspath(output), "study.db"))
 

@@ -239,7 +239,8 @@ int main(int argc, char** argv) {
   if (*report && std::filesystem::exists(run_dir + "/study.db")) {
     try {
       const lash::FolderLock lock(run_dir);
-      std::cout << "wrote " << lash::cli::write_study_report(run_dir) << "\n";
+      const std::string written = lash::cli::write_study_report(run_dir);
+      std::cout << "wrote " << written << "\n";
       return kExitOk;
     } catch (const lash::IoError& e) {
       std::cerr << "error: " << e.what() << "\n";
@@ -254,7 +255,8 @@ int main(int argc, char** argv) {
   if (*report || *analyze) {
     model_path = run_dir + "/model_resolved.yaml";
     if (!std::filesystem::exists(model_path)) {  // before the lock file is made
-      std::cerr << "error: " << model_path << ": missing: not a folder written by `lash run`\n";
+      std::cerr << "error: " << model_path << ": missing: not a folder written by `lash run` "
+                << (*report ? "(nor a study folder of `lash sweep`, which holds study.db)" : "") << "\n";
       return kExitBadInput;
     }
     try {

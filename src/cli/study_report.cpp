@@ -138,7 +138,12 @@ bool plotted_metric(const std::string& n) {
 }  // namespace
 
 std::string write_study_report(const std::string& folder) {
-  const StudyTable t = read_study(folder + "/study.db");
+  StudyTable t;
+  try {
+    t = read_study(folder + "/study.db");
+  } catch (const IoError& e) {  // a damaged database is bad input, not a failed write
+    throw std::invalid_argument(std::string(e.what()) + " (a damaged study.db: run the study again)");
+  }
   // The x axis: the first parameter with numbers.
   int xp = -1;
   for (size_t p = 0; p < t.parameters.size() && xp < 0; ++p)

@@ -90,7 +90,7 @@ int finish(StudyFolder& f, int total, const Progress& progress, int interrupted_
   }
   if (!quiet)
     fmt::print("study: {} runs in {}/study.db ({} failed); runs.csv and sections.csv beside it\n",
-               recorded, out, progress.failed());
+               recorded, out, f.db().failed());
   return kExitOk;
 }
 
@@ -246,16 +246,19 @@ int SweepCommand::run(std::atomic<int>& interrupt, const std::function<void()>& 
         MPI_Send(&index, 1, MPI_INT, st.MPI_SOURCE, kTagWork, MPI_COMM_WORLD);
         if (index < 0) --active;
       }
-      folder->db().export_csv(out);
+      try {
+        folder->db().export_csv(out);
+      } catch (const std::exception& e) {
+        write_error += (write_error.empty() ? "" : "; then ") + std::string(e.what());
+      }
     } else
 #endif
     {
       write_error = run_study_threads(*folder, spec, jobs_, &interrupt,
                                       [&](const RunRecord& rec) { progress.add(rec); });
     }
-  } catch (const std::exception& e) {  // the CSV exports
-    std::cerr << "error: " << e.what() << "\n";
-    return kExitIo;
+  } catch (const std::exception& e) {  // reading the database (the chains' recorded states)
+    write_error = e.what();
   }
   progress.print(true);
   return finish(*folder, total, progress, interrupt.load(), write_error, quiet_);

@@ -1170,6 +1170,13 @@ LoadedModel load_model_text(const std::string& text, const std::string& filename
   return load_root(root, filename, overrides);
 }
 
+std::vector<Diagnostic> yaml_structure_problems(const std::string& text, const std::string& filename) {
+  Reporter r;
+  r.file = filename;
+  check_documents(text, r);
+  return r.list;
+}
+
 LoadedModel load_model_file(const std::string& path, const std::vector<std::string>& overrides) {
   std::string text;
   try {

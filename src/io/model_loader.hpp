@@ -23,4 +23,8 @@ LoadedModel load_model_file(const std::string& path, const std::vector<std::stri
 LoadedModel load_model_text(const std::string& text, const std::string& filename,
                             const std::vector<std::string>& overrides = {});
 
+/// Duplicate keys (with both places) and a second YAML document in `text`, for any YAML file of
+/// Lash's (models, studies); empty when there are none.
+std::vector<Diagnostic> yaml_structure_problems(const std::string& text, const std::string& filename);
+
 }  // namespace lash

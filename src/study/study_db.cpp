@@ -473,8 +473,18 @@ std::string run_study_threads(StudyFolder& folder, const StudySpec& spec, int jo
     }
   }
   for (auto& t : workers) t.join();
-  folder.db().export_csv(folder.folder());
+  try {
+    folder.db().export_csv(folder.folder());
+  } catch (const std::exception& e) {  // the database error first: it is why the study stopped
+    write_error += (write_error.empty() ? "" : "; then ") + std::string(e.what());
+  }
   return write_error;
+}
+
+int StudyDb::failed() const {
+  Stmt s(db_, "SELECT count(*) FROM runs WHERE status <> 'completed'", path_);
+  s.step();
+  return static_cast<int>(s.number(0));
 }
 
 }  // namespace lash

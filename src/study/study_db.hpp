@@ -28,6 +28,8 @@ class StudyDb {
 
   /// Runs already recorded (any status but interrupted, which is never recorded).
   std::set<int> finished() const;
+  /// Recorded runs that did not complete (failed or error), from this sweep and earlier ones.
+  int failed() const;
   /// Records one run with its parameters, in one transaction. Throws IoError on failure.
   void add(const StudyRun& run, const RunRecord& record, const std::string& worker);
   /// A recorded run's status, message and (continuation studies) final state and driver speed.
@@ -97,7 +99,7 @@ class StudyFolder {
 /// the database by the calling thread and then passed to `on_record` (for a progress line).
 /// `interrupt` (a signal number once set) stops the runs at their next output; they are not
 /// recorded. Returns "" or the database error that stopped the study (the runs recorded before
-/// it stay). Writes runs.csv and sections.csv at the end either way.
+/// it stay; a failed CSV export is added to it). Writes runs.csv and sections.csv at the end.
 std::string run_study_threads(StudyFolder& folder, const StudySpec& spec, int jobs,
                               const std::atomic<int>* interrupt,
                               const std::function<void(const RunRecord&)>& on_record);

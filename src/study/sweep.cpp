@@ -11,6 +11,7 @@
 #include <optional>
 #include <set>
 
+#include "core/dynamics.hpp"
 #include "core/elements/registry.hpp"
 #include "io/diagnostics.hpp"
 #include "io/files.hpp"
@@ -242,6 +243,7 @@ StudySpec load_study_text(const std::string& text, const std::string& file,
   }
   if (!root.IsMap())
     throw ModelError({{file, 1, 1, "", "expected a study (a map with study, model, parameters, ...)"}});
+  if (auto problems = yaml_structure_problems(text, file); !problems.empty()) throw ModelError(problems);
   r.keys(root, {"study", "model", "set", "parameters", "combine", "sampling", "keep", "transient",
                 "lyapunov", "continuation"},
          "study");
@@ -278,9 +280,20 @@ StudySpec load_study_text(const std::string& text, const std::string& file,
     std::set<std::string> seen = {"run", "status", "message", "verdict", "t_reached", "wall_seconds",
                                    "steps", "rhs_evaluations", "events", "worker", "finished"};
     const std::set<std::string> reserved = seen;
+    auto metric_like = [](const std::string& n) {  // metric names share the rows of runs.csv
+      for (const char* tail : {".peak", ".max", ".min", ".rms", ".impacts", ".impact_share",
+                               ".continuous_share", ".free_flight_share", ".max_impact_velocity"}) {
+        const std::string t = tail;
+        if (n.size() > t.size() && n.compare(n.size() - t.size(), t.size(), t) == 0) return true;
+      }
+      return n == "sections" || n == "distinct_points" || n == "lyapunov_exponent" || n == "direction";
+    };
     for (const auto& kv : params) {
       const std::string n = kv.first.as<std::string>("");
       if (n.empty()) r.error(kv.first, "parameters: an empty name");
+      else if (metric_like(n))
+        r.error(kv.first, "parameter '" + n + "': named like a metric or column of the results "
+                                              "(docs/studies.md); call it otherwise");
       else if (!seen.insert(lower(n)).second)
         r.error(kv.first, "parameter '" + n + "': " +
                               (reserved.count(lower(n)) ? "a name every run's row has already; call it otherwise"
@@ -365,11 +378,6 @@ StudySpec load_study_text(const std::string& text, const std::string& file,
               !spec.parameters[0].case_overrides.empty()))
       r.error(c, "continuation: needs exactly one parameter with listed levels (values or "
                  "from/to/count), run in order");
-    else if (!spec.continuation.empty())
-      for (const auto& p : spec.parameters) {
-        if (p.name == "direction")
-          r.error(c, "continuation: a parameter named 'direction' would clash with the run's direction column");
-      }
   }
   if (!r.list.empty()) throw ModelError(r.list);
 
@@ -425,6 +433,14 @@ StudySpec load_study_text(const std::string& text, const std::string& file,
     }
   }
   if (!lm) throw *first_error;
+  const Driver* drv0 = period_driver(lm->model, "");
+  const bool constant_speed = drv0 && drv0->profile == DriverProfile::constant_speed;
+  if (!constant_speed && spec.discard_time < 0 && root["transient"] && root["transient"]["periods"])
+    r.error(root["transient"], "transient: periods needs a constant-speed rotary driver, which the "
+                               "model has not; give the transient in seconds: {time: S}");
+  if (!spec.continuation.empty() && !constant_speed)
+    r.error(root["continuation"], "continuation: needs a constant-speed rotary driver (the hand-over "
+                                  "keeps the crank angle), which the model has not");
   const auto info = channel_info(lm->model, Workspace(lm->model));
   std::vector<std::string> names;
   for (const auto& c : info) names.push_back(c.name);
@@ -635,6 +651,20 @@ RunRecord run_study_point(const StudySpec& spec, const StudyRun& run, const std:
       from->step = 0.0;
       Workspace pw(lm.model);
       project_state(lm.model, pw, t0, from->y);  // the new speed's velocity constraints
+      // A journal deeper in its bearing than contact ever drives it (the parameter changed the
+      // clearance or the geometry) would start with a spurious force spike: refused.
+      Eigen::VectorXd ydot(pw.ny);
+      evaluate(lm.model, pw, t0, from->y.data(), ydot.data());
+      for (int c = 0; c < pw.nc; ++c) {
+        const auto& joint = lm.model.joints[pw.clearance_joints[c]];
+        const double depth = pw.clearance_out[c].delta, c_len = joint.clearance->clearance;
+        if (depth > 0.1 * c_len)
+          throw std::invalid_argument(
+              "continuation: the previous run ends with joint '" + joint.name + "' " +
+              number_text(depth * 1e3) + " mm into this run's bearing (clearance " +
+              number_text(c_len * 1e3) + " mm); the parameter changes the joint, so no run can "
+              "start there: continue over speed-like parameters only, or drop continuation");
+      }
     }
     const Model& model = lm.model;
     const double t_begin = from ? from->t : 0.0;
@@ -701,13 +731,12 @@ RunRecord run_study_point(const StudySpec& spec, const StudyRun& run, const std:
     rec.metrics.push_back({"distinct_points", static_cast<double>(ra.verdict.distinct_points)});
     if (!std::isnan(ra.verdict.lyapunov_exponent))
       rec.metrics.push_back({"lyapunov_exponent", ra.verdict.lyapunov_exponent});
-  } catch (const ModelError& e) {
-    rec.status = "error";
-    rec.message = e.what();
   } catch (const std::exception& e) {
     rec.status = "error";
     rec.message = e.what();
   }
+  while (!rec.message.empty() && std::isspace(static_cast<unsigned char>(rec.message.back())))
+    rec.message.pop_back();
   rec.wall_seconds = elapsed();
   return rec;
 }
