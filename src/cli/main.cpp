@@ -344,6 +344,11 @@ int main(int argc, char** argv) {
         fmt::print("poincare ({}): {} sections, {} distinct point(s)\n",
                    an["poincare"]["kind"].get<std::string>(), an["poincare"]["points"].size(),
                    an["poincare"]["distinct"].get<int>());
+      if (an["poincare"].is_object())
+        for (const auto& j : an["poincare"]["joints"])
+          fmt::print("  joint {}: {} distinct point(s) within {:.3g} m\n",
+                     j["joint"].get<std::string>(), j["distinct"].get<int>(),
+                     j["tolerance"].get<double>());
       for (const auto& [name, sp] : an["spectra"].items()) {
         // The three strongest local maxima.
         const auto& f = sp["frequency"];

@@ -577,6 +577,19 @@ RunAnalysis analyze_run(const Model& model, const AnalysisOptions& o, Observer* 
     } else {
       p.variables = {model.bodies[0].name + ".x", model.bodies[0].name + ".y"};
     }
+    for (int c = 0; c < ws.nc; ++c) {
+      JointSections js;
+      js.joint = model.joints[ws.clearance_joints[c]].name;
+      js.variables = {js.joint + ".ex", js.joint + ".ey"};
+      js.tolerance = 0.01 * model.joints[ws.clearance_joints[c]].clearance->clearance;
+      std::vector<std::vector<double>> own;
+      for (const auto& x : col.sections) {
+        js.points.push_back({x[2 * c], x[2 * c + 1]});
+        own.push_back({x[2 * c], x[2 * c + 1]});
+      }
+      js.distinct = count_distinct(own, js.tolerance);
+      p.joints.push_back(std::move(js));
+    }
     p.points = std::move(col.sections);
     p.times = std::move(col.section_t);
     p.distinct = distinct;

@@ -114,6 +114,15 @@ struct AnimationFrames {
   std::vector<std::vector<Vec2>> eccentricity;           ///< eccentricity[joint][frame], m
 };
 
+/// One clearance joint's section points: its eccentricity (ex, ey) at every section.
+struct JointSections {
+  std::string joint;
+  std::vector<std::string> variables;     ///< "<joint>.ex", "<joint>.ey"
+  std::vector<Vec2> points;               ///< m, one per section (PoincareSections::times)
+  int distinct = 0;                       ///< distinct points within `tolerance`
+  double tolerance = 0.0;                 ///< m: 1% of this joint's clearance
+};
+
 /// Poincaré sections after the transient: stroboscopic (once per driver period) or event-based
 /// (a plane in state space, located by the integrator's root finding).
 struct PoincareSections {
@@ -128,6 +137,9 @@ struct PoincareSections {
   std::vector<std::string> variables;     ///< channel names of the first two coordinates
   int distinct = 0;                       ///< distinct points (count_distinct) within `tolerance`
   double tolerance = 0.0;                 ///< m: 1% of the smallest clearance, 1 µm without one
+  /// Every clearance joint's own points and distinct count (the first two coordinates of
+  /// `points` are the first joint's); empty without a clearance joint.
+  std::vector<JointSections> joints;
 };
 
 /// Amplitude spectrum of one channel after the transient, decimated for display.
