@@ -212,6 +212,12 @@ int main(int argc, char** argv) {
         ->delimiter(',')
         ->expected(2);
   }
+  double period = 0.0;
+  for (auto* sub : {report, analyze})
+    sub->add_option("--period", period,
+                    "Period of the motion, s: sections, crank angle and exponent for a model whose "
+                    "driver is an expression (default: a constant-speed driver's, else the "
+                    "driver's mean speed over the run's last half)");
   double lyapunov_d0 = 0.0;
   analyze->add_option("--lyapunov-d0", lyapunov_d0,
                       "Separation of the two trajectories, m (default 2e-4 x clearance, <= 1e-7)");
@@ -297,6 +303,7 @@ int main(int argc, char** argv) {
   if (*report || *analyze) {
     lash::AnalysisOptions ro;
     ro.discard_periods = discard_periods;
+    ro.period = period;
     if (window.size() == 2) ro.stats_t0 = window[0], ro.stats_t1 = window[1];
     if (angle_range.size() == 2) ro.stats_angle0 = angle_range[0], ro.stats_angle1 = angle_range[1];
     if (*analyze) {
@@ -340,6 +347,12 @@ int main(int argc, char** argv) {
       lash::write_file_atomic(
           run_dir + "/analysis.json",
           an.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
+      if (an["period"]["value"].is_number())
+        fmt::print("period: {:.6g} s ({})\n", an["period"]["value"].get<double>(),
+                   an["period"]["source"].get<std::string>());
+      else
+        fmt::print("period: none (no revolute driver with a well-defined mean speed; --period "
+                   "sets one)\n");
       if (an["poincare"].is_object())
         fmt::print("poincare ({}): {} sections, {} distinct point(s)\n",
                    an["poincare"]["kind"].get<std::string>(), an["poincare"]["points"].size(),

@@ -265,6 +265,9 @@ json report_data(const Model& model, const RunAnalysis& a) {
   an["lyapunov"] = lyapunov_json(a.lyapunov);
   an["verdict"] = {{"class", a.verdict.kind}, {"evidence", a.verdict.evidence},
                    {"rule", a.verdict.rule}};
+  an["period"] = {{"value", a.period > 0 ? json(a.period) : json(nullptr)},
+                  {"driver", a.period_driver.empty() ? json(nullptr) : json(a.period_driver)},
+                  {"source", a.period_source}};
   d["analysis"] = an;
   return d;
 }
