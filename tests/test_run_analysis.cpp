@@ -392,8 +392,8 @@ TEST(RunAnalysis, SectionsForEveryClearanceJoint) {
     for (size_t k = 0; k < js.points.size(); ++k) {
       EXPECT_EQ(js.points[k].x(), p.points[k][2 * c]);
       EXPECT_EQ(js.points[k].y(), p.points[k][2 * c + 1]);
-      // An eccentricity: within the clearance plus a penetration far below it.
-      EXPECT_LT(js.points[k].norm(), 0.5e-3 * 1.01);
+      // An eccentricity: the clearance plus a penetration (tens of µm at 5000 rpm) at most.
+      EXPECT_LT(js.points[k].norm(), 0.5e-3 * 1.2);
     }
   }
 }

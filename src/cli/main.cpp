@@ -37,6 +37,11 @@ class ProgressObserver : public lash::Observer {
     if (w_) w_->event(e, ws);
   }
   std::string stop_reason() const override { return w_ ? w_->stop_reason() : std::string(); }
+  bool wants_steps() const override { return w_ && w_->wants_steps(); }
+  void step(double t0, double t1, const Eigen::VectorXd& y, const lash::Workspace& ws,
+            lash::StepProbe& probe) override {
+    if (w_) w_->step(t0, t1, y, ws, probe);
+  }
   void progress(double t, double t_end) override {
     if (!show_) return;
     const auto now = std::chrono::steady_clock::now();

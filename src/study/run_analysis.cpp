@@ -165,6 +165,11 @@ class Collector : public Observer {
   void progress(double t, double t_end) override {
     if (extra_) extra_->progress(t, t_end);
   }
+  bool wants_steps() const override { return extra_ && extra_->wants_steps(); }
+  void step(double t0, double t1, const Eigen::VectorXd& y, const Workspace& ws,
+            StepProbe& probe) override {
+    if (extra_) extra_->step(t0, t1, y, ws, probe);
+  }
   void section(double t, const Eigen::VectorXd& y, const Workspace& ws) override {
     if (extra_) extra_->section(t, y, ws);
     if (t < t_discard - 1e-12) return;
