@@ -23,6 +23,7 @@
 #include "analysis/dynamics_analysis.hpp"
 #include "analysis/signal.hpp"
 #include "core/elements/registry.hpp"
+#include "core/extrema.hpp"
 #include "core/simulate.hpp"
 #include "io/diagnostics.hpp"
 #include "io/files.hpp"
@@ -99,7 +100,7 @@ R run_interruptible(const std::function<R()>& work, std::atomic<int>& interrupt)
 class Collector : public lash::Observer {
  public:
   Collector(const lash::Model& model, size_t channels, size_t expected)
-      : model_(model), nch_(channels) {
+      : extrema(model), model_(model), nch_(channels) {
     time.reserve(expected);
     values.reserve(expected * channels);
   }
@@ -108,15 +109,24 @@ class Collector : public lash::Observer {
     const size_t offset = values.size();
     values.resize(offset + nch_);
     lash::channel_values(model_, ws, y, values.data() + offset);
+    extrema.sample(t, values.data() + offset);
     if (time.size() == 1)
       for (int k = 0; k < ws.nc; ++k) initial_contact.push_back(ws.contact[k].in_contact);
   }
+  /// The exact extrema between outputs, as `lash run`'s summary.json has them.
+  bool wants_steps() const override { return true; }
+  void step(double t0, double t1, const Eigen::VectorXd& y, const lash::Workspace& ws,
+            lash::StepProbe& probe) override {
+    extrema.step(t0, t1, y, ws, probe);
+  }
   void event(const lash::ContactEvent& e, const lash::Workspace&) override {
+    extrema.restart();
     event_time.push_back(e.t);
     event_joint.push_back(e.clearance);
     event_onset.push_back(e.onset);
     event_velocity.push_back(e.velocity);
   }
+  lash::ChannelExtrema extrema;
   std::vector<double> time, values, event_time, event_velocity;
   std::vector<int> event_joint;
   std::vector<bool> event_onset, initial_contact;
@@ -195,6 +205,13 @@ py::dict simulate(const CompiledModel& cm) {
   ev["velocity"] = to_numpy(std::move(collector->event_velocity));
   d["events"] = ev;
   d["initial_contact"] = collector->initial_contact;
+  std::vector<double> lo, t_lo, hi, t_hi;
+  for (const auto& e : collector->extrema.extrema()) {
+    lo.push_back(e.min), t_lo.push_back(e.t_min), hi.push_back(e.max), t_hi.push_back(e.t_max);
+  }
+  py::dict ext;
+  ext["min"] = lo, ext["t_min"] = t_lo, ext["max"] = hi, ext["t_max"] = t_hi;
+  d["extrema"] = ext;
   return d;
 }
 

@@ -363,3 +363,72 @@ solver: {end_time: 0.5, output_interval: 1e-3, initial_state: given}
   EXPECT_FALSE(r.lyapunov.has_value());
   EXPECT_EQ(r.verdict.sections, 0);
 }
+
+TEST(RunAnalysis, SectionsForEveryClearanceJoint) {
+  // Flores slider-crank with clearance at crank–rod and rod–slider: each joint gets its own
+  // section points (its eccentricity at every section) and distinct count; the first two
+  // coordinates of the combined points stay the first joint's.
+  AnalysisOptions o;
+  o.lyapunov = false;
+  o.ideal_twin = false;
+  const Analysed a = analyse(read_file(example_path("flores_slider_crank.yaml")),
+                             {"joints.crank_rod.clearance=0.5e-3", "solver.end_time=0.06",
+                              "solver.output_interval=1e-4"},
+                             o);
+  ASSERT_TRUE(a.run.result.status.ok) << a.run.result.status.message;
+  ASSERT_TRUE(a.run.poincare.has_value());
+  const PoincareSections& p = *a.run.poincare;
+  ASSERT_EQ(p.joints.size(), 2u);
+  EXPECT_EQ(p.joints[0].joint, "crank_rod");
+  EXPECT_EQ(p.joints[1].joint, "rod_slider");
+  EXPECT_EQ(p.joints[1].variables, (std::vector<std::string>{"rod_slider.ex", "rod_slider.ey"}));
+  ASSERT_GE(p.times.size(), 4u);  // sections from T on, after one discarded period
+  for (size_t c = 0; c < 2; ++c) {
+    const JointSections& js = p.joints[c];
+    ASSERT_EQ(js.points.size(), p.times.size());
+    EXPECT_GE(js.distinct, 1);
+    EXPECT_LE(js.distinct, static_cast<int>(js.points.size()));
+    EXPECT_DOUBLE_EQ(js.tolerance, 0.01 * 0.5e-3);
+    for (size_t k = 0; k < js.points.size(); ++k) {
+      EXPECT_EQ(js.points[k].x(), p.points[k][2 * c]);
+      EXPECT_EQ(js.points[k].y(), p.points[k][2 * c + 1]);
+      // An eccentricity: the clearance plus a penetration (tens of µm at 5000 rpm) at most.
+      EXPECT_LT(js.points[k].norm(), 0.5e-3 * 1.2);
+    }
+  }
+}
+
+TEST(RunAnalysis, ExpressionDriverGetsAPeriodFromItsMeanSpeedOrFromTheUser) {
+  // The subharmonic model with a start-up ramp: speed 20·min(t/0.2, 1) rad/s. Over the run's
+  // last half the speed is 20 rad/s, so the period is 2π/20 s; --period overrides it.
+  std::string yaml = kSubharmonic(20.0, 100.0);
+  const std::string from = "speed: 20.000000", to = "speed: \"20*min(time/0.2, 1)\"";
+  ASSERT_NE(yaml.find(from), std::string::npos);
+  yaml.replace(yaml.find(from), from.size(), to);
+  AnalysisOptions o;
+  o.lyapunov = false;
+  o.ideal_twin = false;
+  const Analysed a = analyse(yaml, {}, o);
+  ASSERT_TRUE(a.run.result.status.ok) << a.run.result.status.message;
+  EXPECT_EQ(a.run.period_driver, "motor");
+  EXPECT_NEAR(a.run.period, 2 * M_PI / 20.0, 1e-9);
+  EXPECT_NE(a.run.period_source.find("mean speed of driver 'motor'"), std::string::npos)
+      << a.run.period_source;
+  ASSERT_TRUE(a.run.poincare.has_value());
+  EXPECT_EQ(a.run.poincare->times.size(), 4u);  // T, 2T, 3T, 4T ≤ 1.3 s (before T discarded)
+  // The crank angle follows the ramp: ∫ 100 τ dτ = 50 t² rad before t = 0.2 s, then 20 rad/s.
+  ASSERT_FALSE(a.run.crank_angle_deg.empty());
+  for (size_t k = 0; k < a.run.series.time.size(); ++k) {
+    const double t = a.run.series.time[k];
+    const double rad = t < 0.2 ? 50 * t * t : 2.0 + 20 * (t - 0.2);
+    double deg = std::fmod(rad * 180 / M_PI, 360.0);
+    const double diff = std::abs(deg - a.run.crank_angle_deg[k]);
+    EXPECT_LT(std::min(diff, 360 - diff), 1e-3) << "t = " << t;
+  }
+  o.period = 0.25;
+  const Analysed b = analyse(yaml, {}, o);
+  EXPECT_DOUBLE_EQ(b.run.period, 0.25);
+  EXPECT_EQ(b.run.period_source, "--period 0.25 s");
+  ASSERT_TRUE(b.run.poincare.has_value());
+  EXPECT_EQ(b.run.poincare->times.size(), 5u);  // 0.25 … 1.25 s after one discarded period
+}

@@ -260,6 +260,8 @@ class Result:
         self.warnings: List[str] = raw["warnings"]
         self.final_state: Dict[str, Any] = raw["final_state"]
         self._initial_contact = raw["initial_contact"]
+        # Exact extrema tracked between outputs (as in summary.json); absent: from the rows.
+        self._extrema = raw.get("extrema")
         self._summary: Optional[dict] = None
 
     def __getitem__(self, channel: str) -> np.ndarray:
@@ -300,9 +302,13 @@ class Result:
                 continue
             i_min, i_max = int(np.argmin(col)), int(np.argmax(col))
             lo, hi = float(col[i_min]), float(col[i_max])
+            t_lo, t_hi = float(self.time[i_min]), float(self.time[i_max])
+            if self._extrema is not None:  # tracked between outputs, as `lash run` does
+                lo, hi = float(self._extrema["min"][i]), float(self._extrema["max"][i])
+                t_lo, t_hi = float(self._extrema["t_min"][i]), float(self._extrema["t_max"][i])
             channels[name] = {"unit": self.units[name], "description": self.descriptions[name],
-                              "min": lo, "t_min": float(self.time[i_min]), "max": hi,
-                              "t_max": float(self.time[i_max]), "peak": max(abs(lo), abs(hi))}
+                              "min": lo, "t_min": t_lo, "max": hi,
+                              "t_max": t_hi, "peak": max(abs(lo), abs(hi))}
         joints = {}
         t_first = float(self.time[0]) if len(self.time) else 0.0
         t_last = float(self.time[-1]) if len(self.time) else 0.0

@@ -37,6 +37,11 @@ class ProgressObserver : public lash::Observer {
     if (w_) w_->event(e, ws);
   }
   std::string stop_reason() const override { return w_ ? w_->stop_reason() : std::string(); }
+  bool wants_steps() const override { return w_ && w_->wants_steps(); }
+  void step(double t0, double t1, const Eigen::VectorXd& y, const lash::Workspace& ws,
+            lash::StepProbe& probe) override {
+    if (w_) w_->step(t0, t1, y, ws, probe);
+  }
   void progress(double t, double t_end) override {
     if (!show_) return;
     const auto now = std::chrono::steady_clock::now();
@@ -212,6 +217,12 @@ int main(int argc, char** argv) {
         ->delimiter(',')
         ->expected(2);
   }
+  double period = 0.0;
+  for (auto* sub : {report, analyze})
+    sub->add_option("--period", period,
+                    "Period of the motion, s: sections, crank angle and exponent for a model whose "
+                    "driver is an expression (default: a constant-speed driver's, else the "
+                    "driver's mean speed over the run's last half)");
   double lyapunov_d0 = 0.0;
   analyze->add_option("--lyapunov-d0", lyapunov_d0,
                       "Separation of the two trajectories, m (default 2e-4 x clearance, <= 1e-7)");
@@ -299,6 +310,7 @@ int main(int argc, char** argv) {
   if (*report || *analyze) {
     lash::AnalysisOptions ro;
     ro.discard_periods = discard_periods;
+    ro.period = period;
     if (window.size() == 2) ro.stats_t0 = window[0], ro.stats_t1 = window[1];
     if (angle_range.size() == 2) ro.stats_angle0 = angle_range[0], ro.stats_angle1 = angle_range[1];
     if (*analyze) {
@@ -342,10 +354,21 @@ int main(int argc, char** argv) {
       lash::write_file_atomic(
           run_dir + "/analysis.json",
           an.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
+      if (an["period"]["value"].is_number())
+        fmt::print("period: {:.6g} s ({})\n", an["period"]["value"].get<double>(),
+                   an["period"]["source"].get<std::string>());
+      else
+        fmt::print("period: none (no revolute driver with a well-defined mean speed; --period "
+                   "sets one)\n");
       if (an["poincare"].is_object())
         fmt::print("poincare ({}): {} sections, {} distinct point(s)\n",
                    an["poincare"]["kind"].get<std::string>(), an["poincare"]["points"].size(),
                    an["poincare"]["distinct"].get<int>());
+      if (an["poincare"].is_object())
+        for (const auto& j : an["poincare"]["joints"])
+          fmt::print("  joint {}: {} distinct point(s) within {:.3g} m\n",
+                     j["joint"].get<std::string>(), j["distinct"].get<int>(),
+                     j["tolerance"].get<double>());
       for (const auto& [name, sp] : an["spectra"].items()) {
         // The three strongest local maxima.
         const auto& f = sp["frequency"];

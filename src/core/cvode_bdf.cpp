@@ -74,6 +74,14 @@ class CvodeBdf final : public Integrator {
       check(CVodeReInit(mem_, t, y_), "CVodeReInit");
     }
     t_ = t;
+    t_step_ = t;
+    root_pending_ = false;
+  }
+
+  void dense_at(double t, Eigen::VectorXd& y) override {
+    N_Vector v = N_VMake_Serial(p_.n, y.data(), ctx_);
+    CVodeGetDky(mem_, t, 0, v);
+    N_VDestroy(v);
   }
 
   Advance advance(double t_out, Eigen::VectorXd& y) override {
@@ -83,7 +91,7 @@ class CvodeBdf final : public Integrator {
     }
     double t_ret = t_;
     last_error_.clear();
-    const int flag = CVode(mem_, t_out, y_, &t_ret, CV_NORMAL);
+    const int flag = hook_ ? one_step_to(t_out, t_ret) : CVode(mem_, t_out, y_, &t_ret, CV_NORMAL);
     if (pending_) {  // the right-hand side threw (e.g. an ExpressionError): CVODE has stopped
       std::exception_ptr e = pending_;
       pending_ = nullptr;
@@ -120,6 +128,47 @@ class CvodeBdf final : public Integrator {
   IntegratorStats stats() const override { return current(); }
 
  private:
+  /// CVode in CV_ONE_STEP mode, step by step up to t_out, calling the step hook after each
+  /// step: the steps are those of CV_NORMAL mode. A root located beyond t_out (one-step mode
+  /// searches the whole step) is kept and returned once t_out passes it, so that outputs and
+  /// events come in time order as in CV_NORMAL mode. Returns CVode's flag; y_ holds the state
+  /// at t_ret.
+  int one_step_to(double t_out, double& t_ret) {
+    for (;;) {
+      if (root_pending_) {
+        if (t_root_ <= t_out) {
+          root_pending_ = false;
+          check(CVodeGetDky(mem_, t_root_, 0, y_), "CVodeGetDky");
+          t_ret = t_root_;
+          return CV_ROOT_RETURN;
+        }
+        check(CVodeGetDky(mem_, t_out, 0, y_), "CVodeGetDky");
+        t_ret = t_out;
+        return CV_SUCCESS;
+      }
+      if (t_step_ >= t_out) {  // the last step passed t_out: interpolate there
+        check(CVodeGetDky(mem_, t_out, 0, y_), "CVodeGetDky");
+        t_ret = t_out;
+        return CV_SUCCESS;
+      }
+      const double t0 = t_step_;
+      double t1 = t0;
+      const int flag = CVode(mem_, t_out, y_, &t1, CV_ONE_STEP);
+      if (pending_ || flag < 0) {
+        t_ret = t1;
+        return flag;
+      }
+      if (flag == CV_ROOT_RETURN) {
+        hook_(t0, t1);  // the step up to the root; what lies past it is integrated again
+        root_pending_ = true;
+        t_root_ = t1;
+        continue;
+      }
+      t_step_ = t1;
+      hook_(t0, t1);
+    }
+  }
+
   /// Counters since the first reset: those before the last CVodeReInit plus CVODE's own.
   IntegratorStats current() const {
     IntegratorStats s;
@@ -175,6 +224,9 @@ class CvodeBdf final : public Integrator {
   SUNLinearSolver ls_ = nullptr;
   bool initialised_ = false;
   double t_ = 0.0;
+  double t_step_ = 0.0;       ///< end of the last step taken in one-step mode
+  bool root_pending_ = false; ///< one-step mode: a root at t_root_ not yet returned
+  double t_root_ = 0.0;
   long events_ = 0;
   IntegratorStats accumulated_;
   std::string last_error_;

@@ -162,9 +162,12 @@ class Dopri5 final : public Integrator {
       stats_.last_step = h;
       h_ = h * std::clamp(fac, 0.2, rejected_last ? 1.0 : 10.0);
       locate_events();
+      if (hook_) hook_(t_old_, t_);  // the step, cut at a located event
       return "";
     }
   }
+
+  void dense_at(double t, Eigen::VectorXd& y) override { dense(t, y); }
 
   void dense(double t, Eigen::VectorXd& y) const {
     const double th = (t - t_old_) / h_step_, th1 = 1.0 - th;

@@ -55,6 +55,20 @@ class Integrator {
   virtual Advance advance(double t_out, Eigen::VectorXd& y) = 0;
   virtual IntegratorStats stats() const = 0;
   virtual const char* name() const = 0;
+
+  /// Called after every accepted step with its interval [t0, t1] (a step that located an event
+  /// ends at the event); dense_at() is valid on that interval while the hook runs. Without a
+  /// hook (the default) nothing extra is done, and CVODE runs in its normal mode.
+  using StepHook = std::function<void(double t0, double t1)>;
+  void set_step_hook(StepHook hook) { hook_ = std::move(hook); }
+  bool has_step_hook() const { return static_cast<bool>(hook_); }
+  /// The state at t in the last accepted step [t0, t1], from the integrator's dense output
+  /// (Dormand–Prince: its 4th-order continuous extension; CVODE: CVodeGetDky on its
+  /// interpolating polynomial).
+  virtual void dense_at(double t, Eigen::VectorXd& y) = 0;
+
+ protected:
+  StepHook hook_;
 };
 
 /// Dormand–Prince 5(4) with error control, 4th-order dense output (Hairer, Nørsett & Wanner,

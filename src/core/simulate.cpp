@@ -53,7 +53,41 @@ bool journal_through_bearing(const Model& model, const Workspace& ws, RunStatus&
   return false;
 }
 
+/// The dense output of the step being reported, evaluated into the run's workspace.
+class DenseProbe final : public StepProbe {
+ public:
+  DenseProbe(const Model& model, Workspace& ws, Integrator& integrator)
+      : y_end(ws.ny), model_(model), ws_(ws), integrator_(integrator), y_(ws.ny), ydot_(ws.ny) {}
+  bool at(double t) override {
+    integrator_.dense_at(t, y_);
+    return evaluate(model_, ws_, t, y_.data(), ydot_.data());
+  }
+  const Eigen::VectorXd& state() const override { return y_; }
+  const Workspace& workspace() const override { return ws_; }
+  Eigen::VectorXd y_end;  ///< the state at the step's end, as reported
+
+ private:
+  const Model& model_;
+  Workspace& ws_;
+  Integrator& integrator_;
+  Eigen::VectorXd y_, ydot_;
+};
+
 }  // namespace
+
+void Simulator::hook_steps(Observer* observer) {
+  if (!(observer && observer->wants_steps())) observer = nullptr;
+  if (observer == stepping_) return;
+  stepping_ = observer;
+  if (!observer) return integrator_->set_step_hook({});
+  auto probe = std::make_shared<DenseProbe>(model_, ws_, *integrator_);
+  integrator_->set_step_hook([this, observer, probe](double t0, double t1) {
+    // The step's end, evaluated as an output would be, then whatever the observer probes.
+    if (!probe->at(t1)) return;  // not finite: the run loop reports it
+    probe->y_end = probe->state();
+    observer->step(t0, t1, probe->y_end, ws_, *probe);
+  });
+}
 
 Simulator::Simulator(const Model& model, Workspace& ws, std::vector<SectionPlane> planes)
     : model_(model), ws_(ws), planes_(std::move(planes)) {
@@ -117,6 +151,7 @@ State Simulator::snapshot() const { return {t_, y_, ws_.contact, integrator_->st
 
 // A function-try-block: an expression failing mid-run (ExpressionError) is a numerical failure.
 bool Simulator::advance_to(double t_target, Observer* observer) try {
+  hook_steps(observer);
   while (t_ < t_target) {
     const Advance adv = integrator_->advance(t_target, y_try_);
     if (adv.kind == Advance::failure) {

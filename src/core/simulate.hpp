@@ -34,6 +34,18 @@ struct ContactEvent {
   double velocity = 0.0;   ///< δ̇ at the located crossing (the impact velocity δ̇⁻ at onset), m/s
 };
 
+/// Evaluates the workspace at any time of the integrator step being reported to
+/// Observer::step(), from the integrator's dense output.
+class StepProbe {
+ public:
+  virtual ~StepProbe() = default;
+  /// Evaluates the workspace (forces, accelerations: everything the outputs show) at t in the
+  /// step [t0, t1]; the state there is state(). False if it cannot be evaluated there.
+  virtual bool at(double t) = 0;
+  virtual const Eigen::VectorXd& state() const = 0;
+  virtual const Workspace& workspace() const = 0;
+};
+
 /// Receives results as they are produced (so nothing needs to be kept in memory).
 class Observer {
  public:
@@ -45,6 +57,13 @@ class Observer {
   virtual void progress(double /*t*/, double /*t_end*/) {}
   /// Called at every stroboscopic section time (see SectionSchedule); `ws` is evaluated there.
   virtual void section(double /*t*/, const Eigen::VectorXd& /*y*/, const Workspace& /*ws*/) {}
+  /// True if step() is wanted; otherwise the run loop does nothing per step (no cost).
+  virtual bool wants_steps() const { return false; }
+  /// Called after every accepted integrator step [t0, t1] (a step that located an event ends at
+  /// the event, before the event is handled); `ws` is evaluated at (t1, y). `probe` evaluates
+  /// the workspace anywhere in [t0, t1] from the dense output (it changes `ws`).
+  virtual void step(double /*t0*/, double /*t1*/, const Eigen::VectorXd& /*y*/,
+                    const Workspace& /*ws*/, StepProbe& /*probe*/) {}
   /// Checked after every output: a non-empty reason (the results can no longer be written) stops
   /// the run there with outcome write_error.
   virtual std::string stop_reason() const { return {}; }
@@ -130,6 +149,9 @@ class Simulator {
   std::vector<SectionPlane> planes_;
   std::unique_ptr<Integrator> integrator_;
   Eigen::VectorXd y_, y_try_, g_event_, ydot_;
+  Observer* stepping_ = nullptr;  ///< the observer the step hook reports to
+  /// Sets the integrator's step hook for `observer` (none when it wants no steps).
+  void hook_steps(Observer* observer);
   double t_ = 0.0;
   RunStatus status_;
 };

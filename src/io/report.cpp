@@ -240,6 +240,14 @@ json report_data(const Model& model, const RunAnalysis& a) {
                       {"discarded_periods", p.discarded_periods}, {"variables", p.variables},
                       {"points", pts}, {"times", r6(p.times)}, {"distinct", p.distinct},
                       {"tolerance", p.tolerance}};
+    json joints = json::array();
+    for (const JointSections& js : p.joints) {
+      json jp = json::array();
+      for (const Vec2& e : js.points) jp.push_back({e.x(), e.y()});
+      joints.push_back({{"joint", js.joint}, {"variables", js.variables}, {"points", jp},
+                        {"distinct", js.distinct}, {"tolerance", js.tolerance}});
+    }
+    an["poincare"]["joints"] = joints;
   } else {
     an["poincare"] = nullptr;
   }
@@ -257,6 +265,9 @@ json report_data(const Model& model, const RunAnalysis& a) {
   an["lyapunov"] = lyapunov_json(a.lyapunov);
   an["verdict"] = {{"class", a.verdict.kind}, {"evidence", a.verdict.evidence},
                    {"rule", a.verdict.rule}};
+  an["period"] = {{"value", a.period > 0 ? json(a.period) : json(nullptr)},
+                  {"driver", a.period_driver.empty() ? json(nullptr) : json(a.period_driver)},
+                  {"source", a.period_source}};
   d["analysis"] = an;
   return d;
 }

@@ -24,7 +24,7 @@ ResultsWriter::ResultsWriter(const Model& model, const std::string& folder,
                              const std::string& resolved_yaml, std::vector<std::string> overrides,
                              std::string from)
     : model_(model), folder_(folder), resolved_yaml_(resolved_yaml),
-      overrides_(std::move(overrides)), from_(std::move(from)) {
+      overrides_(std::move(overrides)), from_(std::move(from)), extrema_(model) {
   std::error_code ec;
   std::filesystem::create_directories(folder, ec);
   if (ec) throw IoError(folder, "cannot create the output folder: " + ec.message());
@@ -37,7 +37,6 @@ ResultsWriter::ResultsWriter(const Model& model, const std::string& folder,
   ev_ = RowFile(folder + "/events.csv");
   channels_ = channel_info(model, Workspace(model));
   values_.assign(channels_.size(), 0.0);
-  peaks_.assign(channels_.size(), Peak{});
   joints_.assign(model.clearance_joint_count(), JointStats{});
   std::string header = "time";
   for (const auto& c : channels_) header += "," + c.name;
@@ -72,10 +71,8 @@ void ResultsWriter::output(double t, const Eigen::VectorXd& y, const Workspace& 
     const double v = values_[i];
     row_.push_back(',');
     append_number(v);
-    Peak& p = peaks_[i];
-    if (rows_ == 0 || v < p.min) p.min = v, p.t_min = t;
-    if (rows_ == 0 || v > p.max) p.max = v, p.t_max = t;
   }
+  extrema_.sample(t, values_.data());
   row_.push_back('\n');
   write_rows(ts_, std::string_view(row_.data(), row_.size()));
   if (rows_ == 0) {
@@ -91,6 +88,7 @@ void ResultsWriter::event(const ContactEvent& e, const Workspace& ws) {
   const std::string& name = model_.joints[ws.clearance_joints[e.clearance]].name;
   write_rows(ev_, fmt::format("{:.12g},{},{},{:.9g}\n", e.t, name,
                               e.onset ? "onset" : "separation", e.velocity));
+  extrema_.restart();  // the right-hand side changes here
   JointStats& s = joints_[e.clearance];
   if (e.onset) {
     ++s.impacts;
@@ -137,7 +135,7 @@ RunStatus ResultsWriter::finish(const RunResult& r) {
   const double span = t_last_ - t_first_;
   json channels = json::object();
   for (size_t i = 0; i < channels_.size(); ++i) {
-    const Peak& p = peaks_[i];
+    const ChannelExtremum& p = extrema_.extrema()[i];
     channels[channels_[i].name] = {{"unit", channels_[i].unit},
                                    {"description", channels_[i].description},
                                    {"min", p.min},
@@ -147,6 +145,11 @@ RunStatus ResultsWriter::finish(const RunResult& r) {
                                    {"peak", std::max(std::abs(p.min), std::abs(p.max))}};
   }
   j["channels"] = channels;
+  j["peaks"] = {{"method",
+                 "tracked at every output, accepted integrator step and event; turning points "
+                 "between steps refined by golden-section search on the dense output"},
+                {"refinements", extrema_.refinements()},
+                {"evaluations", extrema_.evaluations()}};
   json cj = json::object();
   int c = 0;
   for (const auto& jt : model_.joints) {

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "core/elements/registry.hpp"
+#include "core/extrema.hpp"
 #include "core/simulate.hpp"
 #include "io/files.hpp"
 
@@ -30,6 +31,13 @@ class ResultsWriter : public Observer {
 
   void output(double t, const Eigen::VectorXd& y, const Workspace& ws) override;
   void event(const ContactEvent& e, const Workspace& ws) override;
+  /// Peaks are tracked between outputs too (core/extrema.hpp), so summary.json's min/max/peak
+  /// do not depend on the output interval.
+  bool wants_steps() const override { return true; }
+  void step(double t0, double t1, const Eigen::VectorXd& y, const Workspace& ws,
+            StepProbe& probe) override {
+    extrema_.step(t0, t1, y, ws, probe);
+  }
   /// The first write error, once one happened: the run stops at its next output.
   std::string stop_reason() const override { return write_error_; }
 
@@ -46,9 +54,6 @@ class ResultsWriter : public Observer {
   static const std::vector<std::string>& run_files();
 
  private:
-  struct Peak {
-    double min = 0, max = 0, t_min = 0, t_max = 0;
-  };
   struct JointStats {
     long impacts = 0, separations = 0;
     double contact_time = 0.0, onset_time = 0.0, max_impact_velocity = 0.0;
@@ -68,7 +73,7 @@ class ResultsWriter : public Observer {
   std::vector<ChannelInfo> channels_;
   std::vector<double> values_;
   fmt::memory_buffer row_;
-  std::vector<Peak> peaks_;
+  ChannelExtrema extrema_;
   std::vector<JointStats> joints_;
   long rows_ = 0;
   double t_first_ = 0.0, t_last_ = 0.0;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <memory>
 #include <random>
 #include <stdexcept>
@@ -12,6 +13,21 @@
 namespace lash {
 
 namespace {
+
+/// The driver's angle at (t, y) in [0, 360) degrees: initial + ωt for a constant speed, else its
+/// prescribed motion (a speed expression's angle is the state integrated with the run).
+double driver_angle_deg(const Model& model, const Workspace& ws, const Driver& d, double t,
+                        const double* y) {
+  double rad;
+  if (d.profile == DriverProfile::constant_speed) {
+    rad = d.initial + d.speed * t;
+  } else {
+    double fd, fdd;
+    driver_motion(model, ws, static_cast<int>(&d - model.drivers.data()), t, y, rad, fd, fdd);
+  }
+  const double deg = std::fmod(rad * 180.0 / M_PI, 360.0);
+  return deg < 0 ? deg + 360.0 : deg;
+}
 
 /// Min/max decimation on a shared time base, streaming: each bucket of `size` outputs becomes
 /// two points (its first and last time) carrying each channel's extremes in time order.
@@ -109,6 +125,7 @@ class Collector : public Observer {
     if (k_ == 0)
       for (int c = 0; c < ws.nc; ++c) events[c].in_contact_at_start = ws.contact[c].in_contact;
     dec.add(t, v_);
+    if (angle_driver) angle_deg.push_back(driver_angle_deg(model_, ws, *angle_driver, t, y.data()));
     if (in_angle_range(t))
       for (size_t i = 0; i < v_.size(); ++i) stats[i].add(t, v_[i]);
     if (twin) {
@@ -135,8 +152,7 @@ class Collector : public Observer {
   }
   bool in_angle_range(double t) const {
     if (!angle_driver || std::isnan(angle0) || std::isnan(angle1)) return true;
-    double deg = std::fmod((angle_driver->initial + angle_driver->speed * t) * 180.0 / M_PI, 360.0);
-    if (deg < 0) deg += 360.0;
+    const double deg = angle_deg.empty() ? 0.0 : angle_deg.back();
     return angle0 <= angle1 ? (deg >= angle0 && deg <= angle1) : (deg >= angle0 || deg <= angle1);
   }
   void event(const ContactEvent& e, const Workspace& ws) override {
@@ -148,6 +164,11 @@ class Collector : public Observer {
   }
   void progress(double t, double t_end) override {
     if (extra_) extra_->progress(t, t_end);
+  }
+  bool wants_steps() const override { return extra_ && extra_->wants_steps(); }
+  void step(double t0, double t1, const Eigen::VectorXd& y, const Workspace& ws,
+            StepProbe& probe) override {
+    if (extra_) extra_->step(t0, t1, y, ws, probe);
   }
   void section(double t, const Eigen::VectorXd& y, const Workspace& ws) override {
     if (extra_) extra_->section(t, y, ws);
@@ -187,6 +208,7 @@ class Collector : public Observer {
   std::vector<std::vector<double>> fft_data;
   double t_discard = 0.0;
   const Driver* angle_driver = nullptr;
+  std::vector<double> angle_deg;  ///< the angle driver's angle at every output, deg
   double angle0 = std::nan(""), angle1 = std::nan("");
   std::vector<double> frame_t;
   std::vector<std::vector<std::array<double, 3>>> poses;
@@ -315,6 +337,34 @@ const Driver* period_driver(const Model& m, const std::string& name) {
   return nullptr;
 }
 
+const Driver* rotary_driver(const Model& m, const std::string& name) {
+  for (const auto& d : m.drivers)
+    if (driver_is_rotary(m, d) && (name.empty() || d.name == name)) return &d;
+  return nullptr;
+}
+
+double mean_driver_speed(const Model& model, const Driver& d, double t0, double t1) {
+  if (d.profile == DriverProfile::constant_speed) return d.speed != 0.0 ? d.speed : std::nan("");
+  // The prescribed speed ḟ(t) sampled at 2001 points; trapezoidal mean.
+  Workspace ws(model);
+  const Eigen::VectorXd y = Eigen::VectorXd::Zero(ws.ny);
+  const int di = static_cast<int>(&d - model.drivers.data());
+  constexpr int kSamples = 2000;
+  double sum = 0.0, lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (int k = 0; k <= kSamples; ++k) {
+    const double t = t0 + (t1 - t0) * k / kSamples;
+    double f, fd, fdd;
+    driver_motion(model, ws, di, t, y.data(), f, fd, fdd);
+    if (!std::isfinite(fd)) return std::nan("");
+    sum += (k == 0 || k == kSamples) ? 0.5 * fd : fd;
+    lo = std::min(lo, fd);
+    hi = std::max(hi, fd);
+  }
+  const double mean = sum / kSamples;
+  if (!(lo > 0.0 || hi < 0.0) || mean == 0.0) return std::nan("");
+  return mean;
+}
+
 Model ideal_model(const Model& model) {
   Model ideal = model;
   for (auto& j : ideal.joints) j.clearance.reset();
@@ -346,6 +396,8 @@ void check_options(const AnalysisOptions& o) {
       bad("--angle-range " + fmt_g(o.stats_angle0) + "," + fmt_g(o.stats_angle1),
           "both angles must be finite numbers (degrees)");
   }
+  if (!std::isfinite(o.period) || o.period < 0)
+    bad("--period " + fmt_g(o.period), "expected a positive period in seconds");
   if (o.discard_periods < 0 || o.discard_periods > 1000000)
     bad("--discard " + std::to_string(o.discard_periods), "expected a whole number of periods in [0, 1e6]");
   if (!std::isfinite(o.lyapunov_d0) || o.lyapunov_d0 < 0 || o.lyapunov_d0 > 1e-3)
@@ -367,13 +419,33 @@ RunAnalysis analyze_run(const Model& model, const AnalysisOptions& o, Observer* 
     throw std::invalid_argument("--window " + fmt_g(o.stats_t0) + "," + fmt_g(o.stats_t1) +
                                 ": starts at or after the run's end_time (" + fmt_g(s.end_time) +
                                 " s)");
+  // The period: a constant-speed driver's, else --period, else the mean speed of a rotary
+  // expression driver (a start-up ramp) over the run's last half; the crank angle follows the
+  // driver's prescribed motion in every case.
   const Driver* drv = period_driver(model, o.poincare_driver);
+  if (!drv) drv = rotary_driver(model, o.poincare_driver);
   if (!o.poincare_driver.empty() && !drv)
     throw std::invalid_argument("--poincare " + o.poincare_driver +
-                                ": no constant-speed revolute driver of that name");
+                                ": no revolute driver of that name");
+  double period = 0.0;
+  std::string period_source;
+  if (o.period > 0) {
+    period = o.period;
+    period_source = "--period " + fmt_g(o.period) + " s";
+  } else if (drv && drv->profile == DriverProfile::constant_speed && drv->speed != 0.0) {
+    period = 2 * M_PI / std::abs(drv->speed);
+    period_source = "constant speed of driver '" + drv->name + "'";
+  } else if (drv) {
+    const double w = mean_driver_speed(model, *drv, 0.5 * s.end_time, s.end_time);
+    if (std::isfinite(w)) {
+      period = 2 * M_PI / std::abs(w);
+      period_source = "mean speed of driver '" + drv->name + "' over the run's last half (t = " +
+                      fmt_g(0.5 * s.end_time) + " to " + fmt_g(s.end_time) + " s): " + fmt_g(w) +
+                      " rad/s";
+    }
+  }
   if (!std::isnan(o.stats_angle0) && !drv)
-    throw std::invalid_argument("--angle-range needs a constant-speed revolute driver");
-  const double period = drv ? 2 * M_PI / std::abs(drv->speed) : 0.0;
+    throw std::invalid_argument("--angle-range needs a revolute driver");
   const double t_discard = t_start + (period > 0 ? o.discard_periods * period : 0.0);
 
   Workspace ws(model);
@@ -459,17 +531,22 @@ RunAnalysis analyze_run(const Model& model, const AnalysisOptions& o, Observer* 
   col.dec.flush();
   out.period_driver = drv ? drv->name : std::string();
   out.period = period;
+  out.period_source = period_source;
   out.phase = std::move(phase);
 
   // Series (decimated), with the crank angle, and the ideal twin on the same time base.
   out.series.time = std::move(col.dec.time);
   out.series.channels = channels;
   out.series.values = std::move(col.dec.data);
-  if (drv)
+  if (drv && !col.angle_deg.empty()) {
+    // The series' times are output times (first and last of each bucket): the angle there.
+    const double dt = s.output_interval;
     for (double t : out.series.time) {
-      const double deg = std::fmod((drv->initial + drv->speed * t) * 180.0 / M_PI, 360.0);
-      out.crank_angle_deg.push_back(deg < 0 ? deg + 360.0 : deg);
+      const size_t k = std::min(col.angle_deg.size() - 1,
+                                static_cast<size_t>(std::max(0.0, std::round(t / dt))));
+      out.crank_angle_deg.push_back(col.angle_deg[k]);
     }
+  }
   if (twin) {
     IdealTwin it;
     it.result = twin_result;
@@ -579,6 +656,19 @@ RunAnalysis analyze_run(const Model& model, const AnalysisOptions& o, Observer* 
       p.variables = {n + ".ex", n + ".ey"};
     } else {
       p.variables = {model.bodies[0].name + ".x", model.bodies[0].name + ".y"};
+    }
+    for (int c = 0; c < ws.nc; ++c) {
+      JointSections js;
+      js.joint = model.joints[ws.clearance_joints[c]].name;
+      js.variables = {js.joint + ".ex", js.joint + ".ey"};
+      js.tolerance = 0.01 * model.joints[ws.clearance_joints[c]].clearance->clearance;
+      std::vector<std::vector<double>> own;
+      for (const auto& x : col.sections) {
+        js.points.push_back({x[2 * c], x[2 * c + 1]});
+        own.push_back({x[2 * c], x[2 * c + 1]});
+      }
+      js.distinct = count_distinct(own, js.tolerance);
+      p.joints.push_back(std::move(js));
     }
     p.points = std::move(col.sections);
     p.times = std::move(col.section_t);

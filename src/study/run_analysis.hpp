@@ -29,6 +29,9 @@ struct AnalysisOptions {
   std::string poincare_driver;      ///< driver whose period sets the sections ("" = first rotary)
   /// Event-based sections instead of stroboscopic ones: "<body>.<x|y|phi|vx|vy|omega>=V[,down]".
   std::vector<std::string> section_planes;
+  /// The period of the motion, s (`--period`); 0: a constant-speed driver's 2π/|ω|, else a
+  /// rotary expression driver's mean speed over the run's last half when that is well defined.
+  double period = 0.0;
   int discard_periods = 1;          ///< transient periods skipped by sections, spectra, Lyapunov
   std::vector<std::string> fft_channels;   ///< default: translational bodies' ax, each Fn
   std::vector<std::pair<std::string, std::string>> phase;  ///< default: each joint's (ex, ey)
@@ -117,6 +120,15 @@ struct AnimationFrames {
   std::vector<std::vector<Vec2>> eccentricity;           ///< eccentricity[joint][frame], m
 };
 
+/// One clearance joint's section points: its eccentricity (ex, ey) at every section.
+struct JointSections {
+  std::string joint;
+  std::vector<std::string> variables;     ///< "<joint>.ex", "<joint>.ey"
+  std::vector<Vec2> points;               ///< m, one per section (PoincareSections::times)
+  int distinct = 0;                       ///< distinct points within `tolerance`
+  double tolerance = 0.0;                 ///< m: 1% of this joint's clearance
+};
+
 /// Poincaré sections after the transient: stroboscopic (once per driver period) or event-based
 /// (a plane in state space, located by the integrator's root finding).
 struct PoincareSections {
@@ -131,6 +143,9 @@ struct PoincareSections {
   std::vector<std::string> variables;     ///< channel names of the first two coordinates
   int distinct = 0;                       ///< distinct points (count_distinct) within `tolerance`
   double tolerance = 0.0;                 ///< m: 1% of the smallest clearance, 1 µm without one
+  /// Every clearance joint's own points and distinct count (the first two coordinates of
+  /// `points` are the first joint's); empty without a clearance joint.
+  std::vector<JointSections> joints;
 };
 
 /// Amplitude spectrum of one channel after the transient, decimated for display.
@@ -181,6 +196,9 @@ struct RunAnalysis {
   RunResult result;                    ///< the main run
   std::string period_driver;           ///< the driver whose period is used ("" none)
   double period = 0.0;                 ///< s, 2π/|ω| of that driver, 0 without one
+  /// Where `period` came from, as a sentence: the driver's constant speed, --period, or the
+  /// expression driver's mean speed over the run's last half; "" without a period.
+  std::string period_source;
   DecimatedSeries series;              ///< every channel of the main run
   std::vector<double> crank_angle_deg; ///< the period driver's angle in [0, 360) at series.time; empty without one
   std::optional<IdealTwin> ideal_twin; ///< absent if not asked for, no clearance joint, or the twin failed
@@ -197,6 +215,15 @@ struct RunAnalysis {
 /// The driver that sets the period: the constant-speed rotary driver named `name`, else (name
 /// empty) the first one; nullptr if there is none (or `name` is not one).
 const Driver* period_driver(const Model& model, const std::string& name);
+
+/// The rotary driver named `name` (else the first rotary one) whatever its profile; nullptr if
+/// there is none.
+const Driver* rotary_driver(const Model& model, const std::string& name);
+
+/// Mean angular speed (rad/s) of driver `d` over [t0, t1] from its prescribed motion (the
+/// expression or its constant speed); NaN unless its speed keeps one sign there (a start-up
+/// ramp that has not reversed) and the mean is not zero.
+double mean_driver_speed(const Model& model, const Driver& d, double t0, double t1);
 
 /// `model` with every clearance joint made ideal.
 Model ideal_model(const Model& model);

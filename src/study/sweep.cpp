@@ -13,6 +13,7 @@
 
 #include "core/dynamics.hpp"
 #include "core/elements/registry.hpp"
+#include "core/extrema.hpp"
 #include "io/diagnostics.hpp"
 #include "io/files.hpp"
 #include "io/model_loader.hpp"
@@ -576,7 +577,7 @@ namespace {
 class Keep : public Observer {
  public:
   Keep(const Model& model, const Workspace& ws, const StudySpec& spec, RunRecord& rec, double t_transient)
-      : model_(model), rec_(rec), t_transient_(t_transient) {
+      : model_(model), rec_(rec), t_transient_(t_transient), extrema_(model) {
     const auto info = channel_info(model, ws);
     auto index = [&](const std::string& n) {
       for (size_t i = 0; i < info.size(); ++i)
@@ -592,7 +593,18 @@ class Keep : public Observer {
     rec_.series_channels = spec.series;
     rec_.series_values.assign(series_index_.size(), {});
   }
+  /// Exact extrema after the transient (ChannelExtrema): outputs, events and every accepted step
+  /// that starts at or after it, refined on the dense output.
+  bool wants_steps() const override { return true; }
+  void step(double t0, double t1, const Eigen::VectorXd& y, const Workspace& ws, StepProbe& probe) override {
+    if (t0 >= t_transient_ - 1e-12) extrema_.step(t0, t1, y, ws, probe);
+  }
+  void event(const ContactEvent& e, const Workspace& ws) override {
+    if (e.t >= t_transient_ - 1e-12) extrema_.restart();
+  }
+  const std::vector<ChannelExtremum>& extrema() const { return extrema_.extrema(); }
   void output(double t, const Eigen::VectorXd& y, const Workspace& ws) override {
+    if (t >= t_transient_ - 1e-12) extrema_.sample(t, y, ws);
     if (series_index_.empty() || count_++ % every_ != 0) return;
     channel_values(model_, ws, y, values_.data());
     rec_.series_time.push_back(t);
@@ -614,6 +626,7 @@ class Keep : public Observer {
   std::vector<int> section_index_, series_index_;
   std::vector<double> values_;
   long every_ = 1, count_ = 0;
+  ChannelExtrema extrema_;
 };
 
 }  // namespace
@@ -710,12 +723,18 @@ RunRecord run_study_point(const StudySpec& spec, const StudyRun& run, const std:
     std::vector<std::string> channels = spec.channels;
     if (channels.empty())
       for (const auto& c : ra.clearance) channels.push_back(c.joint + ".Fn");
+    // Peaks, max and min exact (between outputs too, docs/analysis.md); rms from the outputs.
+    const auto info = channel_info(model, ws);
     for (const auto& name : channels)
       for (const auto& s : ra.statistics)
         if (s.channel == name) {
-          rec.metrics.push_back({name + ".peak", s.peak});
-          rec.metrics.push_back({name + ".max", s.max});
-          rec.metrics.push_back({name + ".min", s.min});
+          double mx = s.max, mn = s.min;
+          for (size_t i = 0; i < info.size(); ++i)
+            if (info[i].name == name && keep.extrema()[i].seen)
+              mx = std::max(mx, keep.extrema()[i].max), mn = std::min(mn, keep.extrema()[i].min);
+          rec.metrics.push_back({name + ".peak", std::max(std::abs(mx), std::abs(mn))});
+          rec.metrics.push_back({name + ".max", mx});
+          rec.metrics.push_back({name + ".min", mn});
           rec.metrics.push_back({name + ".rms", s.rms});
         }
     for (const auto& c : ra.clearance) {

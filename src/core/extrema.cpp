@@ -1,0 +1,117 @@
+#include "core/extrema.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/elements/registry.hpp"
+
+namespace lash {
+
+namespace {
+
+/// 1/φ, the golden-section ratio.
+constexpr double kInvPhi = 0.6180339887498949;
+
+/// Largest value of the cubic Hermite interpolant through (0, v0, slope h·d0), (1, v1, h·d1),
+/// sampled at 33 points: an estimate of a turning point's height inside a step.
+double hermite_max(double v0, double d0, double v1, double d1, double h) {
+  double best = std::max(v0, v1);
+  for (int k = 1; k < 32; ++k) {
+    const double s = k / 32.0, s2 = s * s, s3 = s2 * s;
+    const double v = (2 * s3 - 3 * s2 + 1) * v0 + (s3 - 2 * s2 + s) * h * d0 +
+                     (-2 * s3 + 3 * s2) * v1 + (s3 - s2) * h * d1;
+    best = std::max(best, v);
+  }
+  return best;
+}
+
+}  // namespace
+
+ChannelExtrema::ChannelExtrema(const Model& model) : model_(model) {
+  const size_t n = channel_info(model, Workspace(model)).size();
+  ext_.assign(n, ChannelExtremum{});
+  for (auto* v : {&v0_, &d0_, &v1_, &d1_, &tmp_}) v->assign(n, 0.0);
+}
+
+void ChannelExtrema::sample(double t, const double* values) {
+  for (size_t i = 0; i < ext_.size(); ++i) {
+    const double v = values[i];
+    if (!std::isfinite(v)) continue;
+    ChannelExtremum& e = ext_[i];
+    if (!e.seen || v < e.min) e.min = v, e.t_min = t;
+    if (!e.seen || v > e.max) e.max = v, e.t_max = t;
+    e.seen = true;
+  }
+}
+
+void ChannelExtrema::sample(double t, const Eigen::VectorXd& y, const Workspace& ws) {
+  channel_values(model_, ws, y, tmp_.data());
+  sample(t, tmp_.data());
+}
+
+bool ChannelExtrema::probe_values(StepProbe& probe, double t, std::vector<double>& out) {
+  ++evaluations_;
+  if (!probe.at(t)) return false;
+  channel_values(model_, probe.workspace(), probe.state(), out.data());
+  sample(t, out.data());
+  return true;
+}
+
+void ChannelExtrema::step(double t0, double t1, const Eigen::VectorXd& y1, const Workspace& ws1,
+                          StepProbe& probe) {
+  const double h = t1 - t0;
+  channel_values(model_, ws1, y1, v1_.data());
+  sample(t1, v1_.data());
+  if (!(h > 0.0)) return;
+  const double eps = kSlopeFraction * h;
+  // The slope at t0: the previous step's left slope, or a forward difference after a restart.
+  if (!have_slope_ || t0 != t_last_) {
+    if (!probe_values(probe, t0, v0_)) return;
+    if (!probe_values(probe, t0 + eps, tmp_)) return;
+    for (size_t i = 0; i < v0_.size(); ++i) d0_[i] = (tmp_[i] - v0_[i]) / eps;
+  }
+  // The left slope at t1.
+  if (!probe_values(probe, t1 - eps, tmp_)) return;
+  for (size_t i = 0; i < v1_.size(); ++i) d1_[i] = (v1_[i] - tmp_[i]) / eps;
+  // A slope changing sign: a turning point inside the step, refined where it may matter.
+  for (size_t i = 0; i < v1_.size(); ++i) {
+    const double a = d0_[i], b = d1_[i];
+    if (!(std::isfinite(a) && std::isfinite(b))) continue;
+    for (const double sign : {1.0, -1.0}) {
+      if (!(sign * a > 0.0 && sign * b < 0.0)) continue;
+      const double est = hermite_max(sign * v0_[i], sign * a, sign * v1_[i], sign * b, h);
+      const double bulge = est - std::max(sign * v0_[i], sign * v1_[i]);
+      const double best = sign > 0 ? ext_[i].max : -ext_[i].min;
+      if (est + bulge >= best) refine(probe, static_cast<int>(i), sign, t0, t1);
+    }
+  }
+  std::swap(v0_, v1_);
+  std::swap(d0_, d1_);
+  t_last_ = t1;
+  have_slope_ = true;
+}
+
+void ChannelExtrema::refine(StepProbe& probe, int i, double sign, double a, double b) {
+  ++refinements_;
+  // Golden-section search for the largest sign·v on [a, b]; every point updates all channels.
+  double c = b - kInvPhi * (b - a), d = a + kInvPhi * (b - a);
+  if (!probe_values(probe, c, tmp_)) return;
+  double fc = sign * tmp_[i];
+  if (!probe_values(probe, d, tmp_)) return;
+  double fd = sign * tmp_[i];
+  for (int it = 2; it < kRefineIterations; ++it) {
+    if (fc >= fd) {
+      b = d, d = c, fd = fc;
+      c = b - kInvPhi * (b - a);
+      if (!probe_values(probe, c, tmp_)) return;
+      fc = sign * tmp_[i];
+    } else {
+      a = c, c = d, fc = fd;
+      d = a + kInvPhi * (b - a);
+      if (!probe_values(probe, d, tmp_)) return;
+      fd = sign * tmp_[i];
+    }
+  }
+}
+
+}  // namespace lash

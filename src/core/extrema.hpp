@@ -1,0 +1,67 @@
+#pragma once
+/// @file extrema.hpp
+/// Exact extrema of every output channel, independent of the output interval: tracked at every
+/// output, every accepted integrator step and every located event, and refined inside a step on
+/// the integrator's dense output where a channel turns (docs/analysis.md, "How peaks are found").
+#include <Eigen/Core>
+#include <vector>
+
+#include "core/model.hpp"
+#include "core/simulate.hpp"
+
+namespace lash {
+
+/// A channel's smallest and largest value over a run and when they occurred.
+struct ChannelExtremum {
+  double min = 0.0, t_min = 0.0, max = 0.0, t_max = 0.0;
+  bool seen = false;  ///< false until a first value arrived
+};
+
+/// Tracks the extrema of all channels (`channel_values`) of a run.
+///
+/// At the end of each accepted step [t0, t1] the channels are evaluated at t1 and at
+/// t1 − ε·h (ε = kSlopeFraction), giving each channel's value and left slope there; the slope at
+/// t0 is the previous step's (or, after an event, a forward difference at t0). A channel whose
+/// slope changes sign over the step has a turning point inside it, which a golden-section
+/// search on the dense output locates (kRefineIterations evaluations, the bracket shrinking to
+/// 0.618^kRefineIterations of the step), unless a cubic Hermite estimate through the end values
+/// and slopes shows it cannot beat the extremum already found. Every workspace evaluated,
+/// refinement points included, updates every channel.
+class ChannelExtrema {
+ public:
+  /// Relative offset of the slope sample at a step's end (fraction of the step).
+  static constexpr double kSlopeFraction = 1e-3;
+  /// Golden-section iterations per turning point.
+  static constexpr int kRefineIterations = 18;
+
+  explicit ChannelExtrema(const Model& model);
+
+  /// A value of every channel at time t (an output or an event): updates the extrema only.
+  void sample(double t, const double* values);
+  /// Channels evaluated from `ws` at (t, y).
+  void sample(double t, const Eigen::VectorXd& y, const Workspace& ws);
+  /// One accepted step (Observer::step): samples t1, finds turning points inside and refines.
+  void step(double t0, double t1, const Eigen::VectorXd& y1, const Workspace& ws1,
+            StepProbe& probe);
+  /// The right-hand side may jump here (an event): the next step takes its start slope anew.
+  void restart() { have_slope_ = false; }
+
+  const std::vector<ChannelExtremum>& extrema() const { return ext_; }
+  long refinements() const { return refinements_; }      ///< golden-section searches run
+  long evaluations() const { return evaluations_; }      ///< workspace evaluations made
+
+ private:
+  /// Evaluates all channels at t on the dense output into `out`; false if not finite.
+  bool probe_values(StepProbe& probe, double t, std::vector<double>& out);
+  /// Golden-section search for channel i's extremum (sign +1: max, −1: min) in [a, b].
+  void refine(StepProbe& probe, int i, double sign, double a, double b);
+
+  const Model& model_;
+  std::vector<ChannelExtremum> ext_;
+  std::vector<double> v0_, d0_, v1_, d1_, tmp_;
+  double t_last_ = 0.0;
+  bool have_slope_ = false;
+  long refinements_ = 0, evaluations_ = 0;
+};
+
+}  // namespace lash
