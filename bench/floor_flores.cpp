@@ -8,14 +8,14 @@
 // The 18 parameters are FloorParams in declaration order (SI); bench_whole reads them from the
 // Lash model (floor_params_from_model), so the two always solve the same problem. The CSV has
 // 12 columns besides time, each the same quantity as the Lash channel of the same name, with
-// the same formatting (%.9g via std::to_chars), written in large buffered blocks.
-#include <charconv>
+// the same formatting (%.9g via lash::format_g9, the CSV writer's), in large buffered blocks.
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <vector>
 
 #include "bench/floor_slider_crank.hpp"
+#include "io/number_format.hpp"
 
 namespace {
 
@@ -52,9 +52,8 @@ class CsvWriter : public lash::bench::FloorObserver {
                           std::sqrt(ex * ex + ey * ey), delta, delta_dot, fn};
     for (size_t i = 0; i < sizeof row / sizeof row[0]; ++i) {
       if (i) buf_.push_back(',');
-      char s[32];
-      const auto r = std::to_chars(s, s + sizeof s, row[i], std::chars_format::general, 9);
-      buf_.insert(buf_.end(), s, r.ptr);
+      char s[lash::kG9MaxChars];
+      buf_.insert(buf_.end(), s, lash::format_g9(row[i], s));
     }
     buf_.push_back('\n');
     if (buf_.size() >= kBlock) flush();
