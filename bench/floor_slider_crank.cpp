@@ -12,6 +12,7 @@ namespace {
 /// Lankarani–Nikravesh hysteresis factor 3(1 − cₑ²)/4 (Lankarani & Nikravesh 1990).
 double ln_factor(double ce) { return 3.0 * (1.0 - ce * ce) / 4.0; }
 
+#ifndef LASH_FLOOR_STANDALONE  // the stand-alone floor program (floor_flores) takes no Model
 void require(bool ok, const std::string& what) {
   if (!ok) throw std::runtime_error("floor_params_from_model: " + what);
 }
@@ -24,8 +25,10 @@ int other(const Joint& j, int body) { return j.a.body == body ? j.b.body : j.a.b
 /// Marker offset of `body` in joint j (a or b side).
 Vec2 offset_on(const Joint& j, int body) { return j.a.body == body ? j.a.s : j.b.s; }
 
+#endif
 }  // namespace
 
+#ifndef LASH_FLOOR_STANDALONE
 FloorParams floor_params_from_model(const Model& model) {
   FloorParams p;
   require(model.loads.empty(), "the floor has no applied loads");
@@ -104,6 +107,7 @@ FloorParams floor_params_from_model(const Model& model) {
   p.output_interval = model.solver.output_interval;
   return p;
 }
+#endif
 
 void floor_gap(const FloorParams& p, double t, const double* y, double& delta,
                double& delta_dot) {
@@ -199,7 +203,7 @@ FloorResult simulate_floor(const FloorParams& p, FloorObserver& observer) {
 
   // Outputs every interval, and at end_time when it is not a multiple of the interval.
   const long n_out = static_cast<long>(std::ceil(p.end_time / p.output_interval - 1e-9));
-  observer.output(0.0, y.data());
+  observer.output(0.0, y.data(), contact);
   ++result.outputs;
   for (long k = 1; k <= n_out;) {
     const double t_out = std::min(k * p.output_interval, p.end_time);
@@ -219,7 +223,7 @@ FloorResult simulate_floor(const FloorParams& p, FloorObserver& observer) {
       integrator->reset(adv.t, y);
       continue;
     }
-    observer.output(t_out, y.data());
+    observer.output(t_out, y.data(), contact);
     ++result.outputs;
     double delta, delta_dot;
     floor_gap(p, t_out, y.data(), delta, delta_dot);

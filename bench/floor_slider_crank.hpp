@@ -73,6 +73,9 @@ class FloorObserver {
  public:
   virtual ~FloorObserver() = default;
   virtual void output(double t, const double* y) = 0;
+  /// The same with the contact state in force at t (for outputs that need the contact force or
+  /// the accelerations); by default forwards to output(t, y).
+  virtual void output(double t, const double* y, const FloorContact& contact) { output(t, y); }
 };
 
 struct FloorResult {

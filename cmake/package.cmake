@@ -22,10 +22,16 @@ endforeach()
 # nlohmann-json; the others are the implementation's.
 set(LASH_PRIVATE_LIBS yaml-cpp ${MUPARSER_LIB} ${GINAC_LIB} ${CLN_LIB} ${SUNDIALS_LIBS}
                       ${FFTW3_THREADS_LIB} ${FFTW3_LIB} SQLite::SQLite3)
+if(LASH_HDF5)
+  list(APPEND LASH_PRIVATE_LIBS ${HDF5_SERIAL_LIB})
+endif()
 # The same by name for the static library's users (no paths of this machine in installed files).
 set(LASH_STATIC_LINK yaml-cpp muparser ginac cln sundials_cvode sundials_nvecserial
                      sundials_sunmatrixdense sundials_sunlinsoldense fftw3_threads fftw3 sqlite3
                      Threads::Threads)
+if(LASH_HDF5)
+  list(APPEND LASH_STATIC_LINK hdf5_serial)
+endif()
 
 foreach(kind shared static)
   string(TOUPPER ${kind} KIND)

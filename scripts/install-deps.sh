@@ -6,7 +6,7 @@ pkgs=(cmake ninja-build g++ make pkg-config
       libeigen3-dev libyaml-cpp-dev libcli11-dev libfmt-dev libmuparser-dev libginac-dev
       libsundials-dev nlohmann-json3-dev libgtest-dev libgmock-dev libbenchmark-dev libfftw3-dev
       python3-matplotlib python3-numpy
-      libsqlite3-dev libopenmpi-dev openmpi-bin
+      libsqlite3-dev libopenmpi-dev openmpi-bin libhdf5-dev python3-h5py
       pybind11-dev python3-dev python3-pytest python3-pandas
       clang libclang-rt-14-dev
       chromium fonts-dejavu-core)

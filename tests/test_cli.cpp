@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -709,3 +710,204 @@ TEST(Cli, SignalsAfterTheRunAndIgnoredSignals) {
   EXPECT_EQ(read_summary(dir)["status"]["outcome"], "completed");
   fs::remove_all(dir);
 }
+
+namespace {
+
+/// The rows of a CSV, split into fields (header first).
+std::vector<std::vector<std::string>> read_csv(const fs::path& p) {
+  std::vector<std::vector<std::string>> rows;
+  std::ifstream in(p);
+  for (std::string line; std::getline(in, line);) {
+    std::vector<std::string> f;
+    size_t start = 0;
+    for (size_t c; (c = line.find(',', start)) != std::string::npos; start = c + 1)
+      f.push_back(line.substr(start, c - start));
+    f.push_back(line.substr(start));
+    rows.push_back(f);
+  }
+  return rows;
+}
+
+}  // namespace
+
+TEST(Cli, ChannelsSelectTheColumnsTimeAlwaysKept) {
+  const fs::path all = temp_dir("channels_all"), some = temp_dir("channels_some");
+  ASSERT_EQ(run_lash("run " + example() + " -q -o " + all.string()).code, 0);
+  const Result r = run_lash("run " + example() + " -q -o " + some.string() +
+                            " --channels 'slider.*, rod_slider.F?,time'");
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto a = read_csv(all / "timeseries.csv"), s = read_csv(some / "timeseries.csv");
+  const std::vector<std::string> expected = {"time",      "slider.x",  "slider.y",     "slider.phi",
+                                             "slider.vx", "slider.vy", "slider.omega", "slider.ax",
+                                             "slider.ay", "slider.alpha", "rod_slider.Fn",
+                                             "rod_slider.Ft", "rod_slider.Fx", "rod_slider.Fy"};
+  ASSERT_EQ(s.at(0), expected);
+  ASSERT_EQ(s.size(), a.size());
+  // Every selected column holds the same text as in the full run.
+  for (size_t c = 0; c < expected.size(); ++c) {
+    const auto it = std::find(a[0].begin(), a[0].end(), expected[c]);
+    ASSERT_NE(it, a[0].end()) << expected[c];
+    const size_t ac = it - a[0].begin();
+    for (size_t row = 1; row < a.size(); ++row)
+      ASSERT_EQ(s[row].at(c), a[row].at(ac)) << expected[c] << " row " << row;
+  }
+  const auto j = read_summary(some);
+  EXPECT_EQ(j["output"]["format"], "csv");
+  EXPECT_EQ(j["output"]["rows"], 2401);
+  EXPECT_EQ(j["output"]["channels"].size(), expected.size() - 1);
+  // summary.json keeps the peaks of every channel, written or not.
+  EXPECT_EQ(j["channels"]["crank.torque"], read_summary(all)["channels"]["crank.torque"]);
+  fs::remove_all(all);
+  fs::remove_all(some);
+}
+
+TEST(Cli, ChannelPatternMatchingNothingIsAnErrorNamingTheClosest) {
+  const fs::path dir = temp_dir("channels_bad");
+  Result r = run_lash("run " + example() + " -q -o " + dir.string() + " --channels 'slider.x,slidr.vx'");
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("--channels: channel pattern 'slidr.vx' matches no channel; the closest are: "
+                       "slider.vx"),
+            std::string::npos)
+      << r.out;
+  EXPECT_FALSE(fs::exists(dir)) << "refused before the folder is touched";
+  // The same from the model file's solver settings (here through --set), named as such.
+  r = run_lash("run " + example() + " -q -o " + dir.string() + " --set solver.output_channels=rod.*,nope*");
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("solver.output_channels: channel pattern 'nope*' matches no channel"),
+            std::string::npos)
+      << r.out;
+  r = run_lash("run " + example() + " -q -o " + dir.string() + " --set solver.output_format=xml");
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("unknown output_format 'xml', expected one of: csv, hdf5"), std::string::npos)
+      << r.out;
+  EXPECT_FALSE(fs::exists(dir));
+}
+
+TEST(Cli, ModelFileSelectsTheChannels) {
+  const fs::path dir = temp_dir("channels_model");
+  const Result r = run_lash("run " + example() + " -q -o " + dir.string() +
+                            " --set solver.output_channels=rod_slider.delta,energy.balance");
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto s = read_csv(dir / "timeseries.csv");
+  EXPECT_EQ(s.at(0), (std::vector<std::string>{"time", "rod_slider.delta", "energy.balance"}));
+  EXPECT_EQ(s.size(), 2402u);
+  EXPECT_EQ(read_summary(dir)["output"]["patterns"],
+            (nlohmann::json{"rod_slider.delta", "energy.balance"}));
+  fs::remove_all(dir);
+}
+
+#ifdef LASH_HDF5
+#include <hdf5.h>
+
+namespace {
+
+/// A dataset of timeseries.h5: its values and its string attributes.
+struct H5Column {
+  std::vector<double> values;
+  std::string unit, description;
+};
+
+std::string h5_string_attribute(hid_t ds, const char* name) {
+  const hid_t attr = H5Aopen(ds, name, H5P_DEFAULT);
+  if (attr < 0) return "<missing>";
+  const hid_t type = H5Aget_type(attr);
+  std::string s(H5Tget_size(type), '\0');
+  H5Aread(attr, type, s.data());
+  H5Tclose(type);
+  H5Aclose(attr);
+  return s.substr(0, s.find('\0'));
+}
+
+/// Reads every dataset named in `names` from `path`.
+std::map<std::string, H5Column> read_h5(const fs::path& path, const std::vector<std::string>& names) {
+  std::map<std::string, H5Column> out;
+  const hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  if (f < 0) return out;
+  for (const auto& n : names) {
+    const hid_t ds = H5Dopen2(f, n.c_str(), H5P_DEFAULT);
+    if (ds < 0) continue;
+    const hid_t space = H5Dget_space(ds);
+    hsize_t dims[1] = {0};
+    H5Sget_simple_extent_dims(space, dims, nullptr);
+    H5Column c;
+    c.values.resize(dims[0]);
+    H5Dread(ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, c.values.data());
+    c.unit = h5_string_attribute(ds, "unit");
+    c.description = h5_string_attribute(ds, "description");
+    H5Sclose(space);
+    H5Dclose(ds);
+    out[n] = c;
+  }
+  H5Fclose(f);
+  return out;
+}
+
+std::string g9(double v) {
+  char s[40];
+  std::snprintf(s, sizeof s, "%.9g", v);
+  return s;
+}
+
+}  // namespace
+
+TEST(Cli, Hdf5HoldsTheCsvValuesInFullWithUnits) {
+  // 0.06 s = 6001 rows: more than one chunk of 4096, so rows are appended as the run goes.
+  const fs::path csv = temp_dir("h5_csv"), h5 = temp_dir("h5_h5");
+  const std::string run = "run " + example() + " -q --set solver.end_time=0.06 -o ";
+  ASSERT_EQ(run_lash(run + csv.string()).code, 0);
+  const Result r = run_lash(run + h5.string() + " --format hdf5");
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_FALSE(fs::exists(h5 / "timeseries.csv"));
+  EXPECT_TRUE(fs::exists(h5 / "events.csv"));
+  const auto rows = read_csv(csv / "timeseries.csv");
+  const auto& names = rows.at(0);
+  const auto cols = read_h5(h5 / "timeseries.h5", names);
+  ASSERT_EQ(cols.size(), names.size()) << "one dataset per column";
+  const auto j = read_summary(h5);
+  EXPECT_EQ(j["output"]["format"], "hdf5");
+  EXPECT_EQ(j["output"]["rows"], 6001);
+  EXPECT_EQ(j["integrator"]["outputs"], 6001);
+  EXPECT_EQ(cols.at("time").unit, "s");
+  size_t full_precision = 0;
+  for (size_t c = 0; c < names.size(); ++c) {
+    const H5Column& col = cols.at(names[c]);
+    ASSERT_EQ(col.values.size(), rows.size() - 1) << names[c];
+    if (c > 0) {
+      EXPECT_EQ(col.unit, j["channels"][names[c]]["unit"].get<std::string>()) << names[c];
+      EXPECT_EQ(col.description, j["channels"][names[c]]["description"].get<std::string>());
+      EXPECT_FALSE(col.description.empty()) << names[c];
+    }
+    for (size_t k = 0; k < col.values.size(); ++k) {
+      // The CSV's printed digits are the HDF5 value's, rounded to 9 significant digits.
+      ASSERT_EQ(g9(col.values[k]), rows[k + 1][c]) << names[c] << " row " << k + 1;
+      full_precision += std::strtod(rows[k + 1][c].c_str(), nullptr) != col.values[k];
+    }
+  }
+  EXPECT_GT(full_precision, 1000u) << "the HDF5 values carry more than the CSV's 9 digits";
+  fs::remove_all(csv);
+  fs::remove_all(h5);
+}
+
+TEST(Cli, Hdf5SelectedChannelsAndAnInterruptedRun) {
+  // SIGTERM during a long run: it stops at an output, and summary.json counts the rows the file
+  // holds, every dataset as long as `time`.
+  const fs::path dir = temp_dir("h5_term");
+  const std::string cmd = std::string(LASH_BINARY) + " run " + example() + " -q -o " + dir.string() +
+                          " --format hdf5 --channels 'slider.*' --set solver.end_time=2 & pid=$!; "
+                          "sleep 1.5; kill -TERM $pid; wait $pid";
+  const Result r = run_lash_raw(cmd);
+  ASSERT_EQ(r.code, 130) << r.out;
+  const auto j = read_summary(dir);
+  EXPECT_EQ(j["status"]["outcome"], "interrupted");
+  const long rows = j["output"]["rows"].get<long>();
+  EXPECT_GT(rows, 0);
+  std::vector<std::string> names = {"time"};
+  for (const auto& n : j["output"]["channels"]) names.push_back(n.get<std::string>());
+  EXPECT_EQ(names.size(), 10u);  // time and slider's 9 channels
+  const auto cols = read_h5(dir / "timeseries.h5", names);
+  ASSERT_EQ(cols.size(), names.size());
+  for (const auto& [n, c] : cols) EXPECT_EQ(static_cast<long>(c.values.size()), rows) << n;
+  EXPECT_NEAR(cols.at("time").values.back(), j["status"]["time"].get<double>(), 1e-12);
+  fs::remove_all(dir);
+}
+#endif

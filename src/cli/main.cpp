@@ -172,6 +172,16 @@ int main(int argc, char** argv) {
                   "Continue from a saved state (a run's final_state.json), time and all, to the "
                   "model's end_time")
       ->check(CLI::ExistingFile);
+  std::string channels_opt, format_opt;
+  run->add_option("--channels", channels_opt,
+                  "Write only these channels to the time series: comma-separated glob patterns, "
+                  "e.g. 'slider.*,rod_slider.*' (time is always written; default: the model's "
+                  "solver.output_channels, else all)");
+  run->add_option("--format", format_opt,
+                  "Time series format: csv (timeseries.csv, 9 significant digits; the default) "
+                  "or hdf5 (timeseries.h5, every double in full; default: the model's "
+                  "solver.output_format)")
+      ->check(CLI::IsMember({"csv", "hdf5"}));
   bool with_report = false;
   run->add_flag("--report", with_report,
                 "Also analyse the run and write report.html, report_data.json and figures/");
@@ -451,12 +461,30 @@ int main(int argc, char** argv) {
       return kExitBadInput;
     }
   }
+  // The time series' channels and format: the options replace the model's solver settings. A
+  // pattern that matches nothing is refused before the folder is touched.
+  lash::OutputSettings output = loaded.output;
+  if (!channels_opt.empty()) output.channels = lash::split_channel_patterns(channels_opt);
+  if (!format_opt.empty())
+    output.format = format_opt == "hdf5" ? lash::OutputFormat::hdf5 : lash::OutputFormat::csv;
+  try {
+    lash::select_channels(lash::channel_info(model, lash::Workspace(model)), output.channels);
+  } catch (const std::invalid_argument& e) {
+    std::cerr << "error: " << (channels_opt.empty() ? "solver.output_channels" : "--channels")
+              << ": " << e.what() << "\nnothing was run; " << out_dir << "/ is unchanged\n";
+    return kExitBadInput;
+  }
+  if (output.format == lash::OutputFormat::hdf5 && !lash::hdf5_available()) {
+    std::cerr << "error: HDF5 output: this lash was built without HDF5 (libhdf5-dev); use --format "
+                 "csv\nnothing was run; " << out_dir << "/ is unchanged\n";
+    return kExitBadInput;
+  }
   std::unique_ptr<lash::FolderLock> lock;
   std::unique_ptr<lash::ResultsWriter> writer;
   try {
     lock = std::make_unique<lash::FolderLock>(out_dir);
     writer = std::make_unique<lash::ResultsWriter>(model, out_dir, loaded.resolved_yaml, overrides,
-                                                   from_state);
+                                                   from_state, output);
   } catch (const lash::IoError& e) {
     std::cerr << "error: " << e.what() << "\n";
     return kExitIo;

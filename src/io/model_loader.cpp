@@ -195,6 +195,7 @@ class Loader {
   }
 
   Reporter& reporter() { return r_; }
+  const OutputSettings& output() const { return output_; }
 
  private:
   // --- references --------------------------------------------------------------------------
@@ -879,7 +880,8 @@ class Loader {
   void read_solver(Model& m, const YAML::Node& n, const YAML::Node& root) {
     Section s(r_, n, root, "solver",
               {"integrator", "rtol", "atol", "end_time", "output_interval", "max_step",
-               "max_steps", "max_outputs", "initial_state", "baumgarte"});
+               "max_steps", "max_outputs", "initial_state", "baumgarte", "output_channels",
+               "output_format"});
     SolverSettings& st = m.solver;
     if (auto integ = s.text("integrator")) {
       if (*integ == "dopri5") st.integrator = IntegratorKind::dopri5;
@@ -903,6 +905,34 @@ class Loader {
       else
         r_.error(s.get("initial_state"), "solver",
                  "unknown initial_state '" + *rule + "', expected one of: ideal, given");
+    }
+    if (s.has("output_channels")) {
+      // A list of glob patterns, or one string of comma-separated patterns (as --channels).
+      const YAML::Node oc = s.get("output_channels");
+      std::vector<std::string> patterns;
+      if (oc.IsScalar()) {
+        patterns = split_channel_patterns(oc.Scalar());
+      } else if (oc.IsSequence()) {
+        for (const auto& e : oc) {
+          if (!e.IsScalar()) {
+            r_.error(e, "solver", "output_channels: each entry must be a pattern such as 'slider.*'");
+            continue;
+          }
+          for (auto& p : split_channel_patterns(e.Scalar())) patterns.push_back(p);
+        }
+      } else {
+        r_.error(oc, "solver", "output_channels must be a list of patterns such as ['slider.*']");
+      }
+      if (patterns.empty() && (oc.IsScalar() || oc.IsSequence()))
+        r_.error(oc, "solver", "output_channels: no pattern given (leave it out to write all channels)");
+      output_.channels = patterns;
+    }
+    if (auto f = s.text("output_format")) {
+      if (*f == "csv") output_.format = OutputFormat::csv;
+      else if (*f == "hdf5") output_.format = OutputFormat::hdf5;
+      else
+        r_.error(s.get("output_format"), "solver",
+                 "unknown output_format '" + *f + "', expected one of: csv, hdf5");
     }
     if (s.has("baumgarte")) {
       Section b(r_, s.get("baumgarte"), s.node(), "solver baumgarte", {"alpha", "beta"});
@@ -928,6 +958,7 @@ class Loader {
   }
 
   Reporter r_;
+  OutputSettings output_;
   YAML::Node defaults_;
   std::vector<std::string> body_names_;
   std::vector<std::vector<Marker>> markers_;
@@ -1130,6 +1161,7 @@ LoadedModel load_root(YAML::Node root, const std::string& filename,
   Loader loader(filename);
   LoadedModel out;
   out.model = loader.load(root);
+  out.output = loader.output();
   out.model.source = filename;
   out.resolved_yaml = YAML::Dump(root);
   return out;

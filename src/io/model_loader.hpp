@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "core/model.hpp"
+#include "io/channel_select.hpp"
 #include "io/diagnostics.hpp"
 
 namespace lash {
@@ -13,6 +14,7 @@ namespace lash {
 struct LoadedModel {
   Model model;
   std::string resolved_yaml;  ///< the model text after --set overrides, as run
+  OutputSettings output;      ///< solver.output_channels, solver.output_format
 };
 
 /// Loads `path`, applying overrides "dotted.path=value" (e.g. joints.rod_slider.clearance=1e-4)

@@ -1,7 +1,9 @@
 #pragma once
 /// @file results_writer.hpp
 /// Streams a run's results into an output folder: timeseries.csv (one column per channel
-/// `<element>.<quantity>`), events.csv (contact onsets and separations) and summary.json
+/// `<element>.<quantity>`, 9 significant digits) or, with OutputFormat::hdf5, timeseries.h5
+/// (io/hdf5_series.hpp, every double in full), of the selected channels (io/channel_select.hpp);
+/// events.csv (contact onsets and separations) and summary.json
 /// (per-channel peaks, per-joint contact statistics, integrator statistics, model and settings).
 /// A run folder holds one run: the outputs of an earlier run are removed first (summary.json
 /// before anything else, so no stale summary ever stands beside new rows). Rows reach the disk
@@ -11,13 +13,16 @@
 
 #include <nlohmann/json.hpp>
 
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "core/elements/registry.hpp"
 #include "core/extrema.hpp"
 #include "core/simulate.hpp"
+#include "io/channel_select.hpp"
 #include "io/files.hpp"
+#include "io/hdf5_series.hpp"
 
 namespace lash {
 
@@ -25,9 +30,12 @@ class ResultsWriter : public Observer {
  public:
   /// Creates `folder` if needed, removes an earlier run's outputs and writes model_resolved.yaml
   /// (`resolved_yaml`, the model as run). `overrides` are the --set values; `from` names the
-  /// state file the run continues from ("" for a run from t = 0). Throws IoError.
+  /// state file the run continues from ("" for a run from t = 0); `output` the channels and
+  /// the format of the time series. Throws IoError; std::invalid_argument, before the folder
+  /// is touched, for a channel pattern that matches nothing or HDF5 in a build without it.
   ResultsWriter(const Model& model, const std::string& folder, const std::string& resolved_yaml,
-                std::vector<std::string> overrides = {}, std::string from = "");
+                std::vector<std::string> overrides = {}, std::string from = "",
+                OutputSettings output = {});
 
   void output(double t, const Eigen::VectorXd& y, const Workspace& ws) override;
   void event(const ContactEvent& e, const Workspace& ws) override;
@@ -61,6 +69,7 @@ class ResultsWriter : public Observer {
   };
   void append_number(double v);  ///< %.9g into row_
   void write_rows(RowFile& file, std::string_view rows);  ///< records the first error
+  void write_series_row(double t);  ///< the selected values_ to timeseries.csv or .h5
 
   const Model& model_;
   std::string folder_;
@@ -71,6 +80,10 @@ class ResultsWriter : public Observer {
   std::string write_error_;
   nlohmann::json extra_ = nlohmann::json::object();
   std::vector<ChannelInfo> channels_;
+  OutputSettings output_;
+  std::vector<std::size_t> selected_;  ///< indices into channels_ written to the time series
+  std::vector<double> picked_;         ///< their values at this output (HDF5)
+  std::unique_ptr<Hdf5Series> h5_;     ///< with OutputFormat::hdf5, instead of the CSV
   std::vector<double> values_;
   fmt::memory_buffer row_;
   ChannelExtrema extrema_;

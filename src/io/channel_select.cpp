@@ -1,0 +1,58 @@
+#include "io/channel_select.hpp"
+
+#include <fnmatch.h>
+
+#include <algorithm>
+#include <stdexcept>
+
+#include "io/diagnostics.hpp"
+
+namespace lash {
+
+std::vector<std::string> split_channel_patterns(const std::string& list) {
+  std::vector<std::string> out;
+  size_t start = 0;
+  while (start <= list.size()) {
+    const size_t comma = std::min(list.find(',', start), list.size());
+    std::string p = list.substr(start, comma - start);
+    const auto first = p.find_first_not_of(" \t");
+    if (first != std::string::npos) out.push_back(p.substr(first, p.find_last_not_of(" \t") - first + 1));
+    start = comma + 1;
+  }
+  return out;
+}
+
+std::vector<std::size_t> select_channels(const std::vector<ChannelInfo>& channels,
+                                         const std::vector<std::string>& patterns) {
+  std::vector<std::size_t> picked;
+  if (patterns.empty()) {
+    for (std::size_t i = 0; i < channels.size(); ++i) picked.push_back(i);
+    return picked;
+  }
+  std::vector<char> selected(channels.size(), 0);
+  for (const auto& p : patterns) {
+    bool any = p == "time";  // always written; naming it is not an error
+    for (std::size_t i = 0; i < channels.size(); ++i)
+      if (fnmatch(p.c_str(), channels[i].name.c_str(), 0) == 0) selected[i] = 1, any = true;
+    if (any) continue;
+    // The closest names by edit distance to the pattern without its wildcards.
+    std::string bare;
+    for (char c : p)
+      if (c != '*' && c != '?' && c != '[' && c != ']') bare += c;
+    std::vector<std::pair<int, std::size_t>> ranked;
+    for (std::size_t i = 0; i < channels.size(); ++i)
+      ranked.push_back({edit_distance(bare, channels[i].name), i});
+    std::stable_sort(ranked.begin(), ranked.end(),
+                     [](const auto& a, const auto& b) { return a.first < b.first; });
+    std::string closest;
+    for (std::size_t k = 0; k < std::min<std::size_t>(3, ranked.size()); ++k)
+      closest += (k ? ", " : "") + channels[ranked[k].second].name;
+    throw std::invalid_argument("channel pattern '" + p + "' matches no channel" +
+                                (closest.empty() ? std::string() : "; the closest are: " + closest));
+  }
+  for (std::size_t i = 0; i < channels.size(); ++i)
+    if (selected[i]) picked.push_back(i);
+  return picked;
+}
+
+}  // namespace lash

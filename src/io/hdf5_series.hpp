@@ -1,0 +1,55 @@
+#pragma once
+/// @file hdf5_series.hpp
+/// A run's time series as HDF5 (timeseries.h5, `lash run --format hdf5`): one 1-D dataset of
+/// 64-bit IEEE doubles per column (`time` first, then each channel under its own name, e.g.
+/// `slider.x`), each with the string attributes `unit` and `description`. Datasets are chunked
+/// and extendible: rows are buffered in memory and appended one chunk at a time, and the file is
+/// flushed (H5Fflush) after every chunk, so the rows on disk grow as the run goes and every
+/// dataset has the same length after each flush. Built only when HDF5 (Debian's libhdf5-dev,
+/// serial) was found; hdf5_available() says whether it was.
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/elements/registry.hpp"
+
+namespace lash {
+
+/// Whether this build can write HDF5.
+bool hdf5_available();
+
+class Hdf5Series {
+ public:
+  /// Rows per chunk (and per append to the file): 4096 doubles = 32 KiB per dataset.
+  static constexpr std::size_t kChunkRows = 4096;
+
+  /// Creates (or truncates) `path` with a dataset `time` and one per channel. Throws IoError,
+  /// or std::invalid_argument in a build without HDF5.
+  Hdf5Series(const std::string& path, const std::vector<ChannelInfo>& channels);
+  Hdf5Series(const Hdf5Series&) = delete;
+  Hdf5Series& operator=(const Hdf5Series&) = delete;
+  ~Hdf5Series();
+
+  /// Appends one row: time and one value per channel, in the constructor's order. Writes a chunk
+  /// when kChunkRows rows are buffered. Throws IoError (the file keeps its earlier chunks).
+  void append(double t, const double* values);
+  /// Writes the buffered rows, flushes and closes. Throws IoError. Idempotent.
+  void close();
+  /// Closes without writing what is buffered (after an error).
+  void abandon();
+  bool is_open() const;
+  /// Rows in the file as of its last flush.
+  long long rows_written() const { return rows_; }
+  const std::string& path() const { return path_; }
+
+ private:
+  void write_buffered();
+
+  struct Handles;
+  std::string path_;
+  std::unique_ptr<Handles> h_;
+  std::vector<std::vector<double>> columns_;  ///< buffered rows, column by column
+  long long rows_ = 0;
+};
+
+}  // namespace lash
