@@ -22,6 +22,7 @@
 #include <filesystem>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "bench/floor_slider_crank.hpp"
@@ -32,6 +33,8 @@ extern char** environ;
 namespace {
 
 struct Case {
+  Case(std::string n, std::vector<std::string> a, int status = 0)
+      : name(std::move(n)), argv(std::move(a)), expected_status(status) {}
   std::string name;
   std::vector<std::string> argv;
   int expected_status = 0;
