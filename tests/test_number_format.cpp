@@ -80,3 +80,14 @@ TEST(NumberFormat, SameBytesAsPrintfOnMillionsOfValues) {
   }
   EXPECT_GT(checked, 1'000'000);
 }
+
+TEST(NumberFormat, ShortestNumberReadsBackExactly) {
+  EXPECT_EQ(lash::shortest_number(3000), "3000");
+  EXPECT_EQ(lash::shortest_number(-2), "-2");
+  EXPECT_EQ(lash::shortest_number(1e-4), "0.0001");
+  EXPECT_EQ(lash::shortest_number(0.00015), "0.00015");
+  EXPECT_EQ(lash::shortest_number(std::nan("")), "nan");
+  EXPECT_EQ(lash::shortest_number(-INFINITY), "-inf");
+  for (double v : {0.1 + 0.2, 3666.6666666666665, 1e-300, 6.02214076e23, 5e15 + 1})
+    EXPECT_EQ(std::strtod(lash::shortest_number(v).c_str(), nullptr), v) << lash::shortest_number(v);
+}

@@ -57,7 +57,6 @@ class Progress {
     fmt::print(stderr, "{}sweep: {}/{} done ({} failed), {} to go{}{}", tty_ ? "\r" : "", done_,
                total_, failed_, left, eta, tty_ && !last ? "    " : "\n");
   }
-  int failed() const { return failed_; }
 
  private:
   int total_, done_, failed_ = 0, this_session_ = 0, next_mark_ = 0;

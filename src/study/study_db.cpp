@@ -15,6 +15,7 @@
 #include <thread>
 
 #include "io/files.hpp"
+#include "io/number_format.hpp"
 
 namespace lash {
 namespace {
@@ -84,20 +85,8 @@ std::string csv_field(const std::string& s) {
   return q + "\"";
 }
 
-/// The shortest text that reads back to the same double ("" for NaN: an empty CSV field).
-std::string csv_number(double v) {
-  if (!std::isfinite(v)) return std::isnan(v) ? "" : (v > 0 ? "inf" : "-inf");
-  char buf[32];
-  if (v == std::floor(v) && std::abs(v) < 1e15) {  // 1000, not 1e+03
-    std::snprintf(buf, sizeof buf, "%.0f", v);
-    return buf;
-  }
-  for (int p = 1; p <= 17; ++p) {
-    std::snprintf(buf, sizeof buf, "%.*g", p, v);
-    if (std::strtod(buf, nullptr) == v) break;
-  }
-  return buf;
-}
+/// A CSV field: the shortest exact text; NaN (a metric a run lacks) an empty field.
+std::string csv_number(double v) { return std::isnan(v) ? std::string() : shortest_number(v); }
 
 std::string now_utc() {
   const std::time_t t = std::time(nullptr);

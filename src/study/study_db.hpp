@@ -39,8 +39,6 @@ class StudyDb {
   /// sections.csv (one row per section point) beside the database, each atomically.
   void export_csv(const std::string& folder) const;
 
-  sqlite3* handle() const { return db_; }
-  const std::string& path() const { return path_; }
 
  private:
   void exec(const std::string& sql) const;

@@ -17,6 +17,7 @@
 #include "io/diagnostics.hpp"
 #include "io/files.hpp"
 #include "io/model_loader.hpp"
+#include "io/number_format.hpp"
 #include "study/run_analysis.hpp"
 
 namespace lash {
@@ -24,21 +25,8 @@ namespace {
 
 using Diagnostics = std::vector<Diagnostic>;
 
-std::string number_text(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.17g", v);
-  if (v == std::floor(v) && std::abs(v) < 1e15) {  // whole numbers as written: 3000, not 3e+03
-    std::snprintf(buf, sizeof buf, "%.0f", v);
-    return buf;
-  }
-  // The shortest text that reads back to the same double.
-  for (int p = 1; p <= 17; ++p) {
-    char s[32];
-    std::snprintf(s, sizeof s, "%.*g", p, v);
-    if (std::strtod(s, nullptr) == v) return s;
-  }
-  return buf;
-}
+/// Override values and messages: the shortest exact text (io/number_format.hpp).
+std::string number_text(double v) { return shortest_number(v); }
 
 struct Reader {
   std::string file;
