@@ -428,6 +428,8 @@ TEST(Cli, RunContinuesFromASavedStateTimeAndAll) {
 
 
 TEST(Cli, ASignalStopsTheRunAndKeepsSummaryAndState) {
+  // (timeout --foreground: one signal to lash only; without it timeout signals the whole process
+  // group too, and a second signal ends lash at once, by design.)
   // SIGTERM, then SIGINT, one second into a long run: the run stops at its next output, writes
   // summary.json (outcome "interrupted") and final_state.json, and exits 130; every CSV row is
   // whole. The folder held a completed run before: its summary must not survive.
@@ -435,7 +437,7 @@ TEST(Cli, ASignalStopsTheRunAndKeepsSummaryAndState) {
   ASSERT_EQ(run_lash("run " + example() + " -q -o " + dir.string() + " --set solver.end_time=0.002").code, 0);
   ASSERT_EQ(read_summary(dir)["status"]["outcome"], "completed");
   for (const char* sig : {"TERM", "INT"}) {
-    const Result r = run_lash_raw("timeout --preserve-status -s " + std::string(sig) + " 1 " +
+    const Result r = run_lash_raw("timeout --foreground --preserve-status -s " + std::string(sig) + " 1 " +
                                   std::string(LASH_BINARY) + " run " + example() + " -q -o " +
                                   dir.string() + " --set solver.end_time=5");
     EXPECT_EQ(r.code, 130) << sig << "\n" << r.out;
@@ -695,7 +697,7 @@ TEST(Cli, SignalsAfterTheRunAndIgnoredSignals) {
   const fs::path dir = temp_dir("late_signal");
   // SIGTERM during run --report: whether it lands in the run or in the analyses after it, the
   // command exits 130, summary.json says interrupted, and no report stands beside the results.
-  Result r = run_lash_raw("timeout --preserve-status -s TERM 2 " + std::string(LASH_BINARY) + " run " +
+  Result r = run_lash_raw("timeout --foreground --preserve-status -s TERM 2 " + std::string(LASH_BINARY) + " run " +
                           example() + " -q --report -o " + dir.string() + " --set solver.end_time=0.3");
   EXPECT_EQ(r.code, 130) << r.out;
   EXPECT_EQ(read_summary(dir)["status"]["outcome"], "interrupted");
