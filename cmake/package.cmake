@@ -4,7 +4,7 @@
 #                                       same position-independent objects as the component
 #                                       libraries (nothing is compiled twice)
 #   P/include/lash/<layer>/*.hpp        the headers, as they lie under src/
-#   P/bin/lash                          the command
+#   P/bin/lash, P/bin/lash-mpi          the command (lash-mpi: with MPI, when built)
 #   P/share/lash/lash_figures.py        the figures tool (found relative to the binary)
 #   P/lib/cmake/Lash/                   LashConfig.cmake, its version file and the exported
 #                                       targets Lash::lash (shared) and Lash::lash_static
@@ -57,7 +57,7 @@ endforeach()
 install(TARGETS lash_shared lash_static EXPORT LashTargets
         LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
         ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR})
-install(TARGETS lash RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+install(TARGETS ${LASH_PROGRAMS} RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
 install(DIRECTORY src/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/lash
         FILES_MATCHING PATTERN "*.hpp" PATTERN "cli" EXCLUDE)
 install(FILES tools/lash_figures.py DESTINATION ${CMAKE_INSTALL_DATADIR}/lash)

@@ -554,3 +554,17 @@ TEST(SweepCli, AStudyThatCannotRunIsRefusedWithItsLocation) {
   EXPECT_FALSE(fs::exists(dir / "out" / "study.db"));
   fs::remove_all(dir);
 }
+
+TEST(SweepCli, UnderAnMpiLauncherWithoutLashMpiBesideItIsRefused) {
+  // MPI lives in lash-mpi beside lash; a lash copied alone, started as one of two MPI processes,
+  // says so instead of running the whole study in every process.
+  const fs::path dir = temp_dir("no_lash_mpi");
+  fs::copy_file(LASH_BINARY, dir / "lash");
+  const fs::path study = write_study(dir, "parameters:\n  drivers.crank.speed_rpm: {values: [1000]}\n");
+  const Result r = sh("OMPI_COMM_WORLD_SIZE=2 OMPI_COMM_WORLD_RANK=0 " + (dir / "lash").string() +
+                      " sweep " + study.string() + " -o " + (dir / "out").string());
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("no lash-mpi beside this lash"), std::string::npos) << r.out;
+  EXPECT_FALSE(fs::exists(dir / "out" / "study.db"));
+  fs::remove_all(dir);
+}

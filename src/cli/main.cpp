@@ -243,7 +243,7 @@ int main(int argc, char** argv) {
       ->take_all();
 
   const lash::cli::TuneAbsorberCommand tune_absorber(app);
-  const lash::cli::SweepCommand sweep(app);
+  const lash::cli::SweepCommand sweep(app, argv);
 
   try {
     app.parse(argc, argv);

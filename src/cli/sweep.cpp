@@ -4,8 +4,11 @@
 #include <fmt/core.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <iostream>
 
@@ -99,6 +102,25 @@ bool under_mpi_launcher() {
   return false;
 }
 
+#ifndef LASH_MPI
+/// The number of processes the MPI launcher started (Open MPI's or a PMI launcher's variable),
+/// 1 when there is none.
+int launcher_world_size() {
+  for (const char* v : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE"})
+    if (const char* n = std::getenv(v)) return std::max(1, std::atoi(n));
+  return 1;
+}
+
+/// `lash-mpi` in this program's folder, or "" if there is none.
+std::string mpi_program() {
+  std::error_code ec;
+  const auto self = std::filesystem::read_symlink("/proc/self/exe", ec);
+  if (ec) return "";
+  const auto p = self.parent_path() / "lash-mpi";
+  return std::filesystem::is_regular_file(p, ec) ? p.string() : "";
+}
+#endif
+
 #ifdef LASH_MPI
 constexpr int kTagWork = 1, kTagResult = 2;
 
@@ -137,7 +159,7 @@ int mpi_worker(std::atomic<int>& interrupt) {
 
 }  // namespace
 
-SweepCommand::SweepCommand(CLI::App& app) {
+SweepCommand::SweepCommand(CLI::App& app, char** argv) : argv_(argv) {
   sub_ = app.add_subcommand(
       "sweep", "Run every case of a study file (docs/studies.md) on all cores, or on the processes "
                "of an MPI job; results in OUTPUT/study.db (SQLite), runs.csv and sections.csv");
@@ -153,16 +175,24 @@ SweepCommand::SweepCommand(CLI::App& app) {
 int SweepCommand::run(std::atomic<int>& interrupt, const std::function<void()>& install_handlers) const {
   const std::string out =
       out_.empty() ? "out/" + std::filesystem::path(study_).stem().string() : out_;
-  int rank = 0, size = 1;
+  [[maybe_unused]] int rank = 0;  // this process's MPI rank (lash-mpi only)
+  int size = 1;
   if (under_mpi_launcher()) {
 #ifdef LASH_MPI
     MPI_Init(nullptr, nullptr);
     MPI_Comm_rank(MPI_COMM_WORLD, &rank);
     MPI_Comm_size(MPI_COMM_WORLD, &size);
 #else
-    if (const char* n = std::getenv("OMPI_COMM_WORLD_SIZE"); n && std::atoi(n) > 1) {
-      std::cerr << "error: this lash was built without MPI (libopenmpi-dev was not found at "
-                   "build time); run `lash sweep` without mpirun, or rebuild with it\n";
+    if (launcher_world_size() > 1) {
+      // MPI is linked into lash-mpi only: hand the command over with the same arguments.
+      if (const std::string mpi = mpi_program(); !mpi.empty()) {
+        execv(mpi.c_str(), argv_);
+        std::cerr << "error: cannot start " << mpi << " for an MPI sweep: " << std::strerror(errno)
+                  << "\n";
+        return kExitIo;
+      }
+      std::cerr << "error: no lash-mpi beside this lash (it is built when libopenmpi-dev is found "
+                   "at build time); run `lash sweep` without mpirun, or rebuild with it\n";
       return kExitBadInput;
     }
 #endif

@@ -4,6 +4,11 @@
 /// processes of an MPI job (rank 0 hands out runs and writes the database, the others run them),
 /// results in DIR/study.db with runs.csv and sections.csv beside it; `--resume` runs only what
 /// the database does not hold yet. `lash report DIR` of such a folder: study_report.html.
+///
+/// Only the program `lash-mpi` (built beside `lash` when Open MPI is found) links MPI, whose
+/// libraries cost every start of a program about 7 ms (bench/README.md, "Whole process"): `lash`
+/// started by an MPI launcher with more than one process executes `lash-mpi` with the same
+/// arguments, so `mpirun -n N lash sweep ...` works with either name.
 #include <CLI/CLI.hpp>
 #include <atomic>
 #include <functional>
@@ -13,7 +18,8 @@ namespace lash::cli {
 
 class SweepCommand {
  public:
-  explicit SweepCommand(CLI::App& app);
+  /// `argv`: the program's arguments, for handing the command to `lash-mpi` under mpirun.
+  SweepCommand(CLI::App& app, char** argv);
   SweepCommand(const SweepCommand&) = delete;
   SweepCommand& operator=(const SweepCommand&) = delete;
   bool parsed() const { return sub_->parsed(); }
@@ -23,6 +29,7 @@ class SweepCommand {
 
  private:
   CLI::App* sub_;
+  char** argv_;
   std::string study_;
   std::string out_;
   int jobs_ = 0;
