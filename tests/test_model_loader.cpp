@@ -216,7 +216,9 @@ TEST(ModelLoader, ExamplesLoad) {
   const std::vector<std::string> names{
       "flores_slider_crank.yaml", "flores_slider_crank_ideal.yaml",
       "flores_slider_crank_crank_rod_clearance.yaml", "flores_slider_crank_lugre.yaml",
-      "tmd_slider_crank.yaml", "radial_engine_5.yaml"};
+      "tmd_slider_crank.yaml", "radial_engine_5.yaml", "press_slider_crank.yaml",
+      "amiri_slider_crank.yaml", "amiri_slider_crank_absorbers.yaml", "amiri_four_bar.yaml",
+      "amiri_four_bar_absorbers.yaml"};
   for (const auto& name : names)
     EXPECT_NO_THROW(load_model_file(lash::test::example_path(name))) << name;
   // The list is every example: a new file in examples/ must be added here (and to the README).
