@@ -1,8 +1,10 @@
 // Example mechanisms against what can be derived for them by hand.
 #include <cmath>
+#include <map>
 
 #include "analysis/absorber.hpp"
 #include "study/run_analysis.hpp"
+#include "study/sweep.hpp"
 #include "test_support.hpp"
 
 using namespace lash;
@@ -210,6 +212,72 @@ TEST(Examples, AmiriAbsorbersFollowTheLinksAccelerationQuasiStatically) {
       // (four-bar); a wrong sign gives 200 %, a stiffness 20 % off about 20 %.
       EXPECT_LT(std::sqrt(err2 / ref2), 0.1);
       EXPECT_LT(off_max, 1e-9);  // the slide keeps it on its axis (Baumgarte drift only)
+    }
+  }
+}
+
+TEST(Examples, AmiriRobustnessStudiesMoveEachParameterByTheirStatedFactors) {
+  // Every case of studies/amiri_*_robustness.yaml, built as lash sweep builds it: it loads and
+  // runs 2 ms, and its case name says what it is: <parameter>_<m|p><percent>[_without]
+  // multiplies that one parameter by 1 ± percent/100 and leaves the others at the design point;
+  // _without removes the absorbers.
+  for (const AmiriMechanism& a : kAmiri) {
+    const std::string key = a.link == "rod" ? "slider_crank" : "four_bar";
+    const std::string joint = a.link == "rod" ? "rod_slider" : "coupler_rocker";
+    const StudySpec spec =
+        load_study_file(std::string(LASH_SOURCE_DIR) + "/studies/amiri_" + key + "_robustness.yaml");
+    const std::vector<StudyRun> runs = study_runs(spec);
+    ASSERT_EQ(runs.size(), 26u);
+    const auto build = [&](const StudyRun& r) {
+      return load_model_text(spec.model_texts.at(r.model), r.model, r.overrides).model;
+    };
+    const Model design = build(runs[0]);
+    ASSERT_EQ(runs[0].values[0], "design");
+    const auto quantities = [&](const Model& m) {
+      // mass, stiffness (along, across), speed, clearance; absent absorbers: NaN
+      std::vector<double> q(5, NAN);
+      double across_mass = NAN;
+      for (const Body& b : m.bodies)
+        if (b.name == "absorber_along") q[0] = b.mass;
+        else if (b.name == "absorber_across") across_mass = b.mass;
+      EXPECT_TRUE(across_mass == q[0] || (std::isnan(across_mass) && std::isnan(q[0])));
+      for (const Load& l : m.loads)
+        if (l.name == "absorber_along_mount") q[1] = l.stiffness_xy[0];
+        else if (l.name == "absorber_across_mount") q[2] = l.stiffness_xy[1];
+      q[3] = m.drivers.at(0).speed;
+      q[4] = joint_named(m, joint).clearance->clearance;
+      return q;
+    };
+    const std::vector<double> q0 = quantities(design);
+    for (const StudyRun& r : runs) {
+      const std::string& name = r.values[0];
+      SCOPED_TRACE(name);
+      Model m = build(r);
+      const std::vector<double> q = quantities(m);
+      const bool without = name.size() > 8 && name.substr(name.size() - 8) == "_without";
+      EXPECT_EQ(m.bodies.size(), without ? 3u : 5u);
+      std::vector<double> factor(5, 1.0);
+      const size_t u = name.find('_');
+      if (name != "design" && name != "design_without") {
+        const std::string what = name.substr(0, u);
+        const double pct = std::stod(name.substr(u + 2, 2)) * (name[u + 1] == 'm' ? -1 : 1);
+        const std::map<std::string, std::vector<int>> index{
+            {"mass", {0}}, {"stiffness", {1, 2}}, {"speed", {3}}, {"clearance", {4}}};
+        ASSERT_TRUE(index.count(what)) << what;
+        for (int i : index.at(what)) factor[i] = 1 + pct / 100;
+      }
+      for (int i = 0; i < 5; ++i) {
+        if (without && i < 3) {
+          EXPECT_TRUE(std::isnan(q[i]));
+          continue;
+        }
+        EXPECT_NEAR(q[i], factor[i] * q0[i], 1e-5 * q0[i]) << "quantity " << i;
+      }
+      m.solver.end_time = 2e-3;
+      m.solver.output_interval = 1e-4;
+      Workspace ws(m);
+      test::Recorder rec(m);
+      EXPECT_TRUE(simulate(m, ws, rec).status.ok);
     }
   }
 }
