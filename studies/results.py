@@ -12,7 +12,10 @@ A claims module is studies/claims/<study name>.py. It may define
   COLUMNS: a list of (metric, header, scale, format) for the table (default: every `.peak` and
            every contact share and impact count);
   claims(runs) -> list of Markdown paragraphs, computed from the numbers: `runs` is a list of
-           dicts {"run", "params" (name → level), "status", "verdict", "metrics" (name → value)}.
+           dicts {"run", "params" (name → level), "status", "verdict", "metrics" (name → value)};
+  FIGURES: a list of {"file", "title", "metric", "ylabel", "x", "series"}: one SVG line chart
+           each (written beside RESULTS.md and shown in it), the metric against the levels of
+           parameter "x", one line per level of parameter "series".
 Nothing in RESULTS.md is typed by hand: every number comes from study.db.
 Standard library only (sqlite3), so it runs wherever Python 3 does.
 """
@@ -82,6 +85,60 @@ def table(params, runs, columns):
     return "\n".join(lines)
 
 
+PALETTE = ["#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#7f7f7f"]
+
+
+def line_chart_svg(title, xlabels, series, ylabel):
+    """A self-contained SVG: one line with markers per series over the categorical x levels."""
+    w, h, left, right, top, bottom = 640, 400, 70, 170, 40, 50
+    values = [v for vs in series.values() for v in vs if v is not None]
+    ymax = max(values) * 1.08 if values and max(values) > 0 else 1.0
+    px = lambda i: left + (i + 0.5) * (w - left - right) / max(1, len(xlabels))
+    py = lambda v: top + (h - top - bottom) * (1 - v / ymax)
+    out = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" '
+           f'font-family="sans-serif" font-size="12">',
+           f'<rect width="{w}" height="{h}" fill="white"/>',
+           f'<text x="{w / 2}" y="22" text-anchor="middle" font-size="14">{title}</text>',
+           f'<line x1="{left}" y1="{h - bottom}" x2="{w - right}" y2="{h - bottom}" stroke="black"/>',
+           f'<line x1="{left}" y1="{top}" x2="{left}" y2="{h - bottom}" stroke="black"/>',
+           f'<text transform="translate(16,{(top + h - bottom) / 2}) rotate(-90)" '
+           f'text-anchor="middle">{ylabel}</text>']
+    for k in range(6):
+        v = ymax * k / 5
+        out.append(f'<line x1="{left - 4}" y1="{py(v):.1f}" x2="{w - right}" y2="{py(v):.1f}" '
+                   f'stroke="#ddd"/><text x="{left - 6}" y="{py(v) + 4:.1f}" '
+                   f'text-anchor="end">{v:.3g}</text>')
+    for i, x in enumerate(xlabels):
+        out.append(f'<text x="{px(i):.1f}" y="{h - bottom + 18}" text-anchor="middle">{x}</text>')
+    for n, (name, vs) in enumerate(series.items()):
+        c = PALETTE[n % len(PALETTE)]
+        pts = [(px(i), py(v)) for i, v in enumerate(vs) if v is not None]
+        if len(pts) > 1:
+            out.append('<polyline fill="none" stroke="%s" stroke-width="2" points="%s"/>'
+                       % (c, " ".join(f"{a:.1f},{b:.1f}" for a, b in pts)))
+        out += [f'<circle cx="{a:.1f}" cy="{b:.1f}" r="4" fill="{c}"/>' for a, b in pts]
+        ly = top + 10 + 18 * n
+        out.append(f'<line x1="{w - right + 12}" y1="{ly}" x2="{w - right + 32}" y2="{ly}" '
+                   f'stroke="{c}" stroke-width="2"/><text x="{w - right + 38}" y="{ly + 4}">{name}</text>')
+    out.append("</svg>")
+    return "\n".join(out) + "\n"
+
+
+def figure(spec, runs):
+    """The SVG text of one FIGURES entry."""
+    xs, ss = [], []
+    for r in runs:
+        x, s = str(r["params"][spec["x"]]), str(r["params"][spec["series"]])
+        if x not in xs:
+            xs.append(x)
+        if s not in ss:
+            ss.append(s)
+    val = {(str(r["params"][spec["x"]]), str(r["params"][spec["series"]])): r["metrics"].get(spec["metric"])
+           for r in runs if r["status"] == "completed"}
+    series = {s: [val.get((x, s)) for x in xs] for s in ss}
+    return line_chart_svg(spec["title"], xs, series, spec["ylabel"])
+
+
 def write(folder, copy_to=None):
     info, params, runs = read_study(folder)
     name = info.get("name", os.path.basename(os.path.normpath(folder)))
@@ -103,6 +160,10 @@ def write(folder, copy_to=None):
     if module and hasattr(module, "PREAMBLE"):
         out += [module.PREAMBLE, ""]
     out += ["## Table", "", table(params, runs, columns), ""]
+    svgs = {}
+    for spec in getattr(module, "FIGURES", []) if module else []:
+        svgs[spec["file"]] = figure(spec, runs)
+        out += [f"![{spec['title']}]({spec['file']})", ""]
     if module and hasattr(module, "claims"):
         out += ["## Against the paper", ""]
         for paragraph in module.claims(runs):
@@ -115,7 +176,10 @@ def write(folder, copy_to=None):
     for t in targets:
         with open(t, "w", encoding="utf-8") as f:
             f.write(text)
-        print(f"wrote {t}")
+        for name, svg in svgs.items():
+            with open(os.path.join(os.path.dirname(t), name), "w", encoding="utf-8") as f:
+                f.write(svg)
+        print(f"wrote {t}" + (f" and {len(svgs)} figure(s)" if svgs else ""))
 
 
 def main():
