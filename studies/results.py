@@ -90,7 +90,7 @@ PALETTE = ["#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e
 
 def line_chart_svg(title, xlabels, series, ylabel):
     """A self-contained SVG: one line with markers per series over the categorical x levels."""
-    w, h, left, right, top, bottom = 640, 400, 70, 170, 40, 50
+    w, h, left, right, top, bottom = 700, 400, 70, 200, 40, 50
     values = [v for vs in series.values() for v in vs if v is not None]
     ymax = max(values) * 1.08 if values and max(values) > 0 else 1.0
     px = lambda i: left + (i + 0.5) * (w - left - right) / max(1, len(xlabels))
