@@ -54,11 +54,13 @@ test-tsan: deps
 bench: build
 	$(BUILD)/bench/bench_flores
 
-# The studies of studies/ (minutes each on two cores) into out/, with their reports.
+# The studies of studies/ (minutes each on two cores) into out/, with their reports and their
+# RESULTS.md (studies/results.py), which is also copied to studies/NAME/RESULTS.md.
 studies: build
 	for s in studies/*.yaml; do \
 	  n=$$(basename $$s .yaml); \
-	  $(BUILD)/lash sweep $$s -o out/$$n --resume && $(BUILD)/lash report out/$$n || exit 1; \
+	  $(BUILD)/lash sweep $$s -o out/$$n --resume -j $(JOBS) && $(BUILD)/lash report out/$$n && \
+	    python3 studies/results.py out/$$n --copy-to studies/$$n || exit 1; \
 	done
 
 clean:

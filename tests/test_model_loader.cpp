@@ -218,7 +218,7 @@ TEST(ModelLoader, ExamplesLoad) {
       "flores_slider_crank_crank_rod_clearance.yaml", "flores_slider_crank_lugre.yaml",
       "tmd_slider_crank.yaml", "radial_engine_5.yaml", "press_slider_crank.yaml",
       "amiri_slider_crank.yaml", "amiri_slider_crank_absorbers.yaml", "amiri_four_bar.yaml",
-      "amiri_four_bar_absorbers.yaml"};
+      "amiri_four_bar_absorbers.yaml", "erkaya_articulated.yaml", "erkaya_compliant.yaml"};
   for (const auto& name : names)
     EXPECT_NO_THROW(load_model_file(lash::test::example_path(name))) << name;
   // The list is every example: a new file in examples/ must be added here (and to the README).
@@ -242,6 +242,19 @@ TEST(ModelLoader, ExamplesLoad) {
   EXPECT_EQ(tmd.loads[0].frame_body, 1);  // the rod
   ASSERT_EQ(tmd.sensors.size(), 1u);
   EXPECT_EQ(tmd.sensors[0].type, SensorType::accelerometer);
+  // Erkaya et al. 2015: two clearance joints against one and a flexural pivot's torsional spring;
+  // five accelerometers in both.
+  for (const char* name : {"erkaya_articulated.yaml", "erkaya_compliant.yaml"}) {
+    SCOPED_TRACE(name);
+    const Model m = load_model_file(lash::test::example_path(name)).model;
+    int clearance = 0, springs = 0;
+    for (const auto& j : m.joints) clearance += j.clearance.has_value();
+    for (const auto& l : m.loads) springs += l.type == LoadType::torsional_spring_damper;
+    const bool compliant = std::string(name) == "erkaya_compliant.yaml";
+    EXPECT_EQ(clearance, compliant ? 1 : 2);
+    EXPECT_EQ(springs, compliant ? 1 : 0);
+    EXPECT_EQ(m.sensors.size(), 5u);
+  }
 }
 
 TEST(ModelLoader, NonFiniteNumbersAndBadNamesAreRejected) {
