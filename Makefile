@@ -60,6 +60,7 @@ studies: build
 	  n=$$(basename $$s .yaml); \
 	  $(BUILD)/lash sweep $$s -o out/$$n --resume && $(BUILD)/lash report out/$$n || exit 1; \
 	done
+	for d in out/breaker_*/; do python3 studies/breaker_metrics.py $$d --csv $$d/breaker_metrics.csv || exit 1; done
 
 clean:
 	rm -rf $(BUILD) build-sanitize build-tsan build-fuzz out
