@@ -6,9 +6,9 @@
 Meng et al. (Shock and Vibration 2015, sections 5.3-5.5) that compare a run with the ideal
 linkage are derived here, each clearance run against its ideal twin:
 
-* ideal twin: the run of the same study whose clearance parameters are all ideal (a parameter
-  named `*clearance` at 0, or the parameter `joints` at its case `ideal` or `none`) and whose
-  other parameters (e.g. the closing time) are equal;
+* ideal twin: the run of the same study whose clearance parameters (named `*clearance` or
+  `joints`) are all ideal (a number 0, or the case `ideal` or `none`) and whose other parameters
+  (e.g. the closing time, the contact stiffness) are equal;
 * closing time T: the first time the ideal twin's moving contact comes within 1 um of its final
   position (the end of the STEP5 input);
 * stroke: moving_contact.x(T) - moving_contact.x(0), interpolated linearly in the kept series;
@@ -33,7 +33,7 @@ def is_clearance_param(name):
 
 
 def is_ideal_value(name, value):
-    if name == "joints":
+    if isinstance(value, str):  # a case name
         return value in ("ideal", "none")
     return float(value) == 0.0
 
