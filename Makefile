@@ -62,6 +62,7 @@ studies: build
 	  $(BUILD)/lash sweep $$s -o out/$$n --resume -j $(JOBS) && $(BUILD)/lash report out/$$n && \
 	    python3 studies/results.py out/$$n --copy-to studies/$$n || exit 1; \
 	done
+	for d in out/breaker_*/; do python3 studies/breaker_metrics.py $$d --csv $$d/breaker_metrics.csv || exit 1; done
 
 clean:
 	rm -rf $(BUILD) build-sanitize build-tsan build-fuzz out

@@ -218,7 +218,8 @@ TEST(ModelLoader, ExamplesLoad) {
       "flores_slider_crank_crank_rod_clearance.yaml", "flores_slider_crank_lugre.yaml",
       "tmd_slider_crank.yaml", "radial_engine_5.yaml", "press_slider_crank.yaml",
       "amiri_slider_crank.yaml", "amiri_slider_crank_absorbers.yaml", "amiri_four_bar.yaml",
-      "amiri_four_bar_absorbers.yaml", "erkaya_articulated.yaml", "erkaya_compliant.yaml"};
+      "amiri_four_bar_absorbers.yaml", "erkaya_articulated.yaml", "erkaya_compliant.yaml",
+      "breaker_linkage.yaml"};
   for (const auto& name : names)
     EXPECT_NO_THROW(load_model_file(lash::test::example_path(name))) << name;
   // The list is every example: a new file in examples/ must be added here (and to the README).
@@ -255,6 +256,26 @@ TEST(ModelLoader, ExamplesLoad) {
     EXPECT_EQ(springs, compliant ? 1 : 0);
     EXPECT_EQ(m.sensors.size(), 5u);
   }
+  // The breaker linkage: 9 moving bodies, 10 revolute and 3 prismatic pairs, one degree of
+  // freedom by Grübler's count once its driver is removed (9·3 − 2·13 = 1), clearance with the
+  // Adams IMPACT law and stepped friction at A and J.
+  const Model breaker = load_model_file(lash::test::example_path("breaker_linkage.yaml")).model;
+  ASSERT_EQ(breaker.bodies.size(), 9u);
+  int revolute = 0, prismatic = 0;
+  std::vector<std::string> clearance;
+  for (const auto& j : breaker.joints) {
+    revolute += j.type == JointType::revolute;
+    prismatic += j.type == JointType::translational;
+    if (j.clearance) {
+      clearance.push_back(j.name);
+      EXPECT_EQ(j.clearance->normal_law, NormalLaw::impact) << j.name;
+      EXPECT_EQ(j.clearance->friction_law, FrictionLaw::adams_stepped) << j.name;
+    }
+  }
+  EXPECT_EQ(revolute, 10);
+  EXPECT_EQ(prismatic, 3);
+  EXPECT_EQ(3 * static_cast<int>(breaker.bodies.size()) - 2 * (revolute + prismatic), 1);
+  EXPECT_EQ(clearance, (std::vector<std::string>{"A", "J"}));
 }
 
 TEST(ModelLoader, NonFiniteNumbersAndBadNamesAreRejected) {
