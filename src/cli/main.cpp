@@ -19,6 +19,7 @@
 #include "io/model_loader.hpp"
 #include "io/report.hpp"
 #include "io/results_writer.hpp"
+#include "io/run_folder.hpp"
 #include "io/state_file.hpp"
 #include "study/run_analysis.hpp"
 
@@ -107,35 +108,6 @@ int exit_code(lash::RunOutcome o) {
   return kExitNumerical;
 }
 
-/// A run folder about to be read by `report` or `analyze` (its model_resolved.yaml checked to exist
-/// before the folder is locked): when the run's summary.json is there, the model in it must be
-/// the one in model_resolved.yaml
-/// (an edited model would give a report of a run that never happened). Returns "" or the problem.
-std::string check_run_folder(const std::string& dir) {
-  namespace fs = std::filesystem;
-  const std::string model = dir + "/model_resolved.yaml", summary = dir + "/summary.json";
-  if (!fs::exists(summary)) return "";  // a run killed before its end: the model alone is enough
-  nlohmann::json j;
-  std::string model_text;
-  try {
-    j = nlohmann::json::parse(lash::read_input_file(summary, lash::kMaxModelFileBytes));
-    model_text = lash::read_input_file(model, lash::kMaxModelFileBytes);
-  } catch (const nlohmann::json::exception& e) {
-    return summary + ": damaged (not valid JSON: " + e.what() + "); run the model again";
-  } catch (const std::exception& e) {
-    return e.what();
-  }
-  const auto* resolved = j.is_object() && j.contains("model") && j["model"].is_object() &&
-                                 j["model"].contains("resolved") && j["model"]["resolved"].is_string()
-                             ? &j["model"]["resolved"]
-                             : nullptr;
-  if (!resolved) return summary + ": damaged (no model.resolved); run the model again";
-  if (resolved->get<std::string>() + "\n" != model_text)
-    return model + ": differs from the model this run used (summary.json model.resolved): edited "
-                   "after the run? Run the edited model with `lash run` instead";
-  return "";
-}
-
 int report_model_error(const lash::ModelError& e) {
   for (const auto& d : e.diagnostics()) std::cerr << d.str() << "\n";
   std::cerr << e.diagnostics().size() << " problem" << (e.diagnostics().size() == 1 ? "" : "s")
@@ -188,8 +160,9 @@ int main(int argc, char** argv) {
 
   std::string run_dir;
   auto* report = app.add_subcommand(
-      "report", "Analyse an earlier run folder (re-running its model_resolved.yaml) and write "
-                "report.html, report_data.json and figures/ into it");
+      "report", "Analyse an earlier run folder from the files the run wrote (simulating only "
+                "the ideal twin and the Lyapunov trajectories) and write report.html, "
+                "report_data.json and figures/ into it");
   report->add_option("folder", run_dir, "A folder written by `lash run` (or by `lash sweep`: its study_report.html)")
       ->required()
       ->check(CLI::ExistingDirectory);
@@ -289,10 +262,6 @@ int main(int argc, char** argv) {
       std::cerr << "error: " << e.what() << "\n";
       return kExitBadInput;
     }
-    if (const std::string problem = check_run_folder(run_dir); !problem.empty()) {
-      std::cerr << "error: " << problem << "\n";
-      return kExitBadInput;
-    }
   }
   lash::LoadedModel loaded;
   try {
@@ -338,9 +307,34 @@ int main(int argc, char** argv) {
       std::cerr << "error: " << e.what() << "\n";
       return kExitBadInput;
     }
+    // What the run wrote, checked before anything is simulated: a damaged folder is refused
+    // naming the file (exit 2), one that cannot be read is an I/O error (exit 3).
+    lash::RecordedRun recorded;
+    const bool readable = lash::run_folder_readable(run_dir);
+    try {
+      if (readable) recorded = lash::read_run_folder(run_dir, model);
+    } catch (const lash::IoError& e) {
+      std::cerr << "error: " << e.what() << "\n";
+      return kExitIo;
+    } catch (const std::exception& e) {
+      std::cerr << "error: " << e.what() << "\n";
+      return kExitBadInput;
+    }
     try {
       ProgressObserver progress(nullptr, isatty(STDERR_FILENO));
-      const lash::RunAnalysis ra = lash::analyze_run(model, ro, &progress);
+      lash::RunAnalysis ra;
+      if (readable) {
+        ra = lash::analyze_recorded_run(model, ro, recorded);
+      } else {  // timeseries.h5 is not read yet: the main run is made again
+        ra = lash::analyze_run(model, ro, &progress);
+        ra.provenance.read.clear();
+        ra.provenance.resimulated.insert(ra.provenance.resimulated.begin(),
+                                         "the main run: timeseries.h5 (lash run --format hdf5) "
+                                         "is not read yet, so the model was run again");
+      }
+      for (const auto& line : ra.provenance.read) std::cout << "read: " << line << "\n";
+      for (const auto& line : ra.provenance.resimulated) std::cout << "simulated now: " << line << "\n";
+      for (const auto& line : ra.provenance.skipped) std::cout << "skipped: " << line << "\n";
       if (const int sig = g_interrupt.load(); sig != 0) {  // during the run or the analyses
         std::cerr << "\ninterrupted by signal " << sig << "; nothing was written\n";
         return kExitInterrupted;
