@@ -141,7 +141,7 @@ TEST(RunFolder, AnalysesFromTheFilesMatchThoseMadeDuringTheRun) {
   EXPECT_TRUE(mentions(files.provenance.read, "events.csv"));
   EXPECT_TRUE(mentions(files.provenance.read, "summary.json"));
   EXPECT_TRUE(mentions(files.provenance.read, "final_state.json"));
-  EXPECT_TRUE(mentions(files.provenance.read, "stroboscopic sections: interpolated"));
+  EXPECT_TRUE(mentions(files.provenance.read, "stroboscopic sections: from the outputs"));
   EXPECT_TRUE(mentions(files.provenance.resimulated, "ideal twin"));
   EXPECT_TRUE(mentions(files.provenance.resimulated, "Lyapunov start state"));
   EXPECT_TRUE(files.provenance.skipped.empty());

@@ -20,6 +20,12 @@ namespace {
 
 using nlohmann::json;
 
+std::string fmt_g(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", v);
+  return buf;
+}
+
 [[noreturn]] void damaged(const std::string& what) { throw RunFolderError(what); }
 
 /// A number of a CSV field, the whole field; NaN and ±inf are numbers (a failed run writes them).
@@ -169,7 +175,7 @@ RecordedRun read_run_folder(const std::string& dir, const Model& model) {
   const RunStatus& status = run.result.status;
   if (status.outcome == RunOutcome::interrupted || status.outcome == RunOutcome::write_error)
     damaged(summary_path + ": the run did not complete (status.outcome " +
-            outcome_name(status.outcome) + " at t = " + std::to_string(status.t) +
+            outcome_name(status.outcome) + " at t = " + fmt_g(status.t) +
             " s), so its results cover part of the run only; continue it with `lash run "
             "--from` or run the model again");
   const json& output = member(sum, summary_path, "output");
@@ -198,7 +204,7 @@ RecordedRun read_run_folder(const std::string& dir, const Model& model) {
     const std::string m = e.what();
     damaged(m.find(state_path) == std::string::npos ? state_path + ": " + m : m);
   }
-  run.read.push_back("final state: final_state.json (t = " + std::to_string(run.result.final_state.t) + " s)");
+  run.read.push_back("final state: final_state.json (t = " + fmt_g(run.result.final_state.t) + " s)");
 
   // events.csv: every row, now (a few thousand at most per second of run).
   const std::string events_path = dir + "/events.csv";

@@ -362,6 +362,9 @@ class SectionInterpolator {
     while (k_ * period_ <= rows_.back().first * (1 + 1e-12)) emit(k_++ * period_);
   }
   double largest_estimate() const { return estimate_; }
+  /// Sections that fell on an output time (taken from the row, not interpolated), and all.
+  long on_outputs() const { return on_outputs_; }
+  long sections() const { return k_; }
 
  private:
   /// The point at ts by Lagrange interpolation through rows [a, b).
@@ -379,6 +382,7 @@ class SectionInterpolator {
     for (const auto& [t, v] : rows_)
       if (std::abs(t - ts) <= 1e-12 * std::max(1.0, std::abs(ts))) {  // on an output time
         sa_.section(ts, point_.at(v.data()));
+        ++on_outputs_;
         return;
       }
     const int n = static_cast<int>(rows_.size());
@@ -393,7 +397,7 @@ class SectionInterpolator {
   const SectionPoint& point_;
   double period_;
   size_t width_;
-  long k_ = 0;
+  long k_ = 0, on_outputs_ = 0;
   double estimate_ = 0.0;
   std::vector<std::pair<double, std::vector<double>>> rows_;
 };
@@ -1068,8 +1072,13 @@ RunAnalysis analyze_recorded_run(const Model& model, const AnalysisOptions& o, R
                                  " m, " + (strobe.largest_estimate() <= 0.1 * tol ? "within" : "above") +
                                  " a tenth of the " + fmt_g(tol) + " m point tolerance";
     if (strobe.largest_estimate() <= 0.1 * tol) {
-      prov.read.push_back("stroboscopic sections: interpolated between outputs (cubic through 4 "
-                          "outputs; " + estimate + ")");
+      const long n = strobe.sections(), exact = strobe.on_outputs();
+      prov.read.push_back(exact == n ? "stroboscopic sections: from the outputs (every section "
+                                       "time k·T is an output time)"
+                                     : "stroboscopic sections: interpolated between outputs "
+                                       "(cubic through 4 outputs; " + estimate + "), " +
+                                           std::to_string(n - exact) + " of " +
+                                           std::to_string(n) + " sections");
     } else {
       rows_sections = false;
       sa.sections.clear();
