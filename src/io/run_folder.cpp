@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <charconv>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -31,11 +32,9 @@ std::string fmt_g(double v) {
 /// A number of a CSV field, the whole field; NaN and ±inf are numbers (a failed run writes them).
 bool parse_number(const char* b, const char* e, double& v) {
   if (b == e) return false;
-  std::string s(b, e);
-  char* end = nullptr;
-  errno = 0;
-  v = std::strtod(s.c_str(), &end);
-  return end == s.c_str() + s.size();
+  if (*b == '+') return false;  // the writer never writes one
+  const auto r = std::from_chars(b, e, v);
+  return r.ec == std::errc() && r.ptr == e;
 }
 
 /// Splits a line at commas.
