@@ -224,14 +224,26 @@ TEST(Cli, ReportAndAnalyzeAnEarlierRun) {
   r = run_lash("analyze " + fs::temp_directory_path().string());
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.out.find("not a folder written by `lash run`"), std::string::npos) << r.out;
-  // lash report writes the page and the data beside the run's results.
-  r = run_lash("report " + dir.string());
+  // lash report writes the page and the data beside the run's results. It takes analyze's
+  // options and applies them to the data the page and figures read; the same options give
+  // analyze the same verdict.
+  const std::string options = " --discard 0 --no-lyapunov --fft slider.ax";
+  r = run_lash("report " + dir.string() + options);
   EXPECT_EQ(r.code, 0) << r.out;
   EXPECT_TRUE(fs::exists(dir / "report.html"));
   EXPECT_TRUE(fs::exists(dir / "report_data.json"));
   const std::string html = lash::test::read_file((dir / "report.html").string());
   EXPECT_EQ(html.find("__LASH_REPORT_DATA__"), std::string::npos);
   EXPECT_NE(html.find("\"flores_slider_crank\""), std::string::npos);
+  const auto data = nlohmann::json::parse(std::ifstream(dir / "report_data.json"))["analysis"];
+  EXPECT_EQ(data["poincare"]["discarded_periods"], 0);
+  EXPECT_EQ(data["poincare"]["points"].size(), 3u);  // sections at 0, T and 2T
+  EXPECT_TRUE(data["lyapunov"].is_null()) << data["lyapunov"];
+  EXPECT_EQ(data["spectra"].size(), 1u);
+  EXPECT_TRUE(data["spectra"].contains("slider.ax"));
+  r = run_lash("analyze " + dir.string() + options);
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_EQ(nlohmann::json::parse(std::ifstream(dir / "analysis.json"))["verdict"], data["verdict"]);
   fs::remove_all(dir);
 }
 
@@ -983,3 +995,24 @@ TEST(Cli, Hdf5SelectedChannelsAndAnInterruptedRun) {
   fs::remove_all(dir);
 }
 #endif
+
+TEST(Cli, AnHdf5RunIsCheckedThenRunAgainAndSaysSo) {
+  // timeseries.h5 is not read yet: the folder is checked as any other (an edited model is
+  // refused), then the model runs again, and the output says so.
+  const fs::path dir = temp_dir("h5_report");
+  Result r = run_lash("run " + example() + " -q --set solver.end_time=0.003 --format hdf5 -o " + dir.string());
+  if (r.code == 2 && r.out.find("without HDF5") != std::string::npos) GTEST_SKIP() << "no HDF5";
+  ASSERT_EQ(r.code, 0) << r.out;
+  r = run_lash("analyze " + dir.string() + " --no-lyapunov");
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("simulated now: the main run: timeseries.h5"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("read: "), std::string::npos) << r.out;
+  const std::string model = lash::test::read_file((dir / "model_resolved.yaml").string());
+  std::ofstream(dir / "model_resolved.yaml") << model << "# edited\n";
+  fs::remove(dir / "analysis.json");
+  r = run_lash("analyze " + dir.string());
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("model_resolved.yaml: differs from the model this run used"), std::string::npos) << r.out;
+  EXPECT_FALSE(fs::exists(dir / "analysis.json"));
+  fs::remove_all(dir);
+}

@@ -177,19 +177,26 @@ int main(int argc, char** argv) {
   std::vector<std::string> fft_channels;
   bool no_lyapunov = false;
   int discard_periods = 1;
-  analyze->add_option("--poincare", poincare_driver,
-                      "Stroboscopic Poincaré section once per period of this constant-speed "
-                      "driver (default: the first one)");
-  analyze->add_option("--fft", fft_channels, "Amplitude spectrum of these channels, e.g. slider.ax")
-      ->take_all();
-  analyze->add_flag("--no-lyapunov", no_lyapunov,
-                    "Skip the largest Lyapunov exponent (two trajectories; computed by default, as "
-                    "by `report`, since the verdict needs it)");
   std::vector<std::string> planes;
-  analyze->add_option("--plane", planes,
-                      "Event-based Poincaré section instead of the stroboscopic one: "
-                      "<body>.<x|y|phi|vx|vy|omega>=VALUE[,down], e.g. slider.vx=0,down");
-  analyze->add_option("--discard", discard_periods, "Transient periods to discard (default 1)");
+  double lyapunov_d0 = 0.0;
+  // The analysis options: the same on both commands, applied to every part of the analyses
+  // (report.html and figures read the same data as analysis.json).
+  for (auto* sub : {report, analyze}) {
+    sub->add_option("--poincare", poincare_driver,
+                    "Stroboscopic Poincaré section once per period of this constant-speed "
+                    "driver (default: the first one)");
+    sub->add_option("--fft", fft_channels, "Amplitude spectrum of these channels, e.g. slider.ax")
+        ->take_all();
+    sub->add_flag("--no-lyapunov", no_lyapunov,
+                  "Skip the largest Lyapunov exponent (two trajectories; computed by default, "
+                  "since the verdict needs it)");
+    sub->add_option("--plane", planes,
+                    "Event-based Poincaré section instead of the stroboscopic one: "
+                    "<body>.<x|y|phi|vx|vy|omega>=VALUE[,down], e.g. slider.vx=0,down");
+    sub->add_option("--discard", discard_periods, "Transient periods to discard (default 1)");
+    sub->add_option("--lyapunov-d0", lyapunov_d0,
+                    "Separation of the two trajectories, m (default 2e-4 x clearance, <= 1e-7)");
+  }
   std::vector<double> window, angle_range;
   for (auto* sub : {report, analyze}) {
     sub->add_option("--window", window, "Statistics over this time window, T0,T1 (s)")
@@ -206,9 +213,6 @@ int main(int argc, char** argv) {
                     "Period of the motion, s: sections, crank angle and exponent for a model whose "
                     "driver is an expression (default: a constant-speed driver's, else the "
                     "driver's mean speed over the run's last half)");
-  double lyapunov_d0 = 0.0;
-  analyze->add_option("--lyapunov-d0", lyapunov_d0,
-                      "Separation of the two trajectories, m (default 2e-4 x clearance, <= 1e-7)");
 
   auto* check = app.add_subcommand("check", "Validate a model: list every problem with file:line:column");
   check->add_option("model", model_path, "Model file (YAML)")->required()->check(CLI::ExistingFile);
@@ -292,13 +296,11 @@ int main(int argc, char** argv) {
     ro.period = period;
     if (window.size() == 2) ro.stats_t0 = window[0], ro.stats_t1 = window[1];
     if (angle_range.size() == 2) ro.stats_angle0 = angle_range[0], ro.stats_angle1 = angle_range[1];
-    if (*analyze) {
-      ro.lyapunov = !no_lyapunov;
-      ro.poincare_driver = poincare_driver;
-      ro.fft_channels = fft_channels;
-      ro.lyapunov_d0 = lyapunov_d0;
-      ro.section_planes = planes;
-    }
+    ro.lyapunov = !no_lyapunov;
+    ro.poincare_driver = poincare_driver;
+    ro.fft_channels = fft_channels;
+    ro.lyapunov_d0 = lyapunov_d0;
+    ro.section_planes = planes;
     install_signal_handlers();
     ro.interrupt = &g_interrupt;
     try {
@@ -310,9 +312,8 @@ int main(int argc, char** argv) {
     // What the run wrote, checked before anything is simulated: a damaged folder is refused
     // naming the file (exit 2), one that cannot be read is an I/O error (exit 3).
     lash::RecordedRun recorded;
-    const bool readable = lash::run_folder_readable(run_dir);
     try {
-      if (readable) recorded = lash::read_run_folder(run_dir, model);
+      recorded = lash::read_run_folder(run_dir, model);
     } catch (const lash::IoError& e) {
       std::cerr << "error: " << e.what() << "\n";
       return kExitIo;
@@ -323,7 +324,7 @@ int main(int argc, char** argv) {
     try {
       ProgressObserver progress(nullptr, isatty(STDERR_FILENO));
       lash::RunAnalysis ra;
-      if (readable) {
+      if (recorded.next_row) {
         ra = lash::analyze_recorded_run(model, ro, recorded);
       } else {  // timeseries.h5 is not read yet: the main run is made again
         ra = lash::analyze_run(model, ro, &progress);

@@ -118,11 +118,6 @@ struct CsvRows {
 
 }  // namespace
 
-bool run_folder_readable(const std::string& dir) {
-  namespace fs = std::filesystem;
-  return !fs::exists(dir + "/timeseries.h5") || fs::exists(dir + "/timeseries.csv");
-}
-
 RecordedRun read_run_folder(const std::string& dir, const Model& model) {
   namespace fs = std::filesystem;
   const std::string summary_path = dir + "/summary.json", model_path = dir + "/model_resolved.yaml";
@@ -187,8 +182,8 @@ RecordedRun read_run_folder(const std::string& dir, const Model& model) {
   } catch (const json::exception& e) {
     damaged(summary_path + ": damaged (" + e.what() + "); run the model again");
   }
-  if (file != "timeseries.csv")
-    damaged(summary_path + ": output.file is " + file + ": only timeseries.csv is read");
+  if (file != "timeseries.csv" && file != "timeseries.h5")
+    damaged(summary_path + ": damaged (output.file is '" + file + "')");
   run.read.push_back("status and integrator statistics: summary.json (outcome " +
                      std::string(outcome_name(status.outcome)) + ")");
 
@@ -248,6 +243,7 @@ RecordedRun read_run_folder(const std::string& dir, const Model& model) {
   // The time series: header and row count now, each row as it is read.
   run.series_file = dir + "/" + file;
   if (!fs::exists(run.series_file)) damaged(run.series_file + ": missing (summary.json lists it)");
+  if (file == "timeseries.h5") return run;  // not read yet: no next_row
   const auto [lines, whole] = count_lines(run.series_file);
   if (!whole)
     damaged(run.series_file + ":" + std::to_string(lines + 1) + ": the last row is cut (no line end)");

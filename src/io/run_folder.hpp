@@ -20,10 +20,6 @@ class RunFolderError : public std::invalid_argument {
   using std::invalid_argument::invalid_argument;
 };
 
-/// Whether `dir`'s time series can be read (false: the run wrote HDF5, which is analysed by
-/// running the model again).
-bool run_folder_readable(const std::string& dir);
-
 /// Reads and checks the run in `dir` against `model` (loaded from its model_resolved.yaml):
 /// summary.json must be valid JSON, record exactly the text of model_resolved.yaml and a run
 /// that completed or stopped on a numerical failure; the time series must have the header and
@@ -31,7 +27,9 @@ bool run_folder_readable(const std::string& dir);
 /// events.csv as many well-formed rows of the model's clearance joints as the summary counts
 /// events; final_state.json must read back into the model's layout. The header, the row count
 /// and every event are checked here; each row as RecordedRun::next_row reads it. Throws
-/// RunFolderError naming the file, IoError when a file cannot be read.
+/// RunFolderError naming the file, IoError when a file cannot be read. A run written as HDF5
+/// (timeseries.h5) is checked up to its time series, which is not read yet: `next_row` is then
+/// empty and the caller runs the model again.
 RecordedRun read_run_folder(const std::string& dir, const Model& model);
 
 }  // namespace lash
