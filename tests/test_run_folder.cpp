@@ -157,6 +157,9 @@ TEST(RunFolder, ChannelsNotWrittenAreSaidAndTheirSectionsMadeAgain) {
   o.lyapunov = false;
   const lash::RunAnalysis in_run = run_into(dir, {"solver.end_time=0.05"}, o, {"slider.*"});
   const lash::RunAnalysis files = from_folder(dir, o);
+  EXPECT_TRUE(mentions(files.provenance.skipped, "animation frames: the pose (x, y, phi) of crank"))
+      << ::testing::PrintToString(files.provenance.skipped);
+  EXPECT_TRUE(files.frames.time.empty());
   EXPECT_TRUE(mentions(files.provenance.skipped, "journal orbits: rod_slider.ex/ey not written"))
       << ::testing::PrintToString(files.provenance.skipped);
   EXPECT_TRUE(mentions(files.provenance.skipped, "spectrum of rod_slider.Fn"));

@@ -166,7 +166,8 @@ class SampleAnalysis {
     // Columns of the poses (φ = 0 for a point mass, which has no angle) and eccentricities.
     for (const auto& b : m.bodies) {
       pose_index.push_back({index(b.name + ".x"), index(b.name + ".y"), index(b.name + ".phi")});
-      if (pose_index.back()[0] < 0 || pose_index.back()[1] < 0) missing_pose.push_back(b.name);
+      const auto& q = pose_index.back();
+      if (q[0] < 0 || q[1] < 0 || (q[2] < 0 && b.rotates())) missing_pose.push_back(b.name);
     }
     poses.resize(m.bodies.size());
     for (int c = 0; c < nc; ++c) {
@@ -198,14 +199,13 @@ class SampleAnalysis {
     }
     for (size_t s = 0; s < fft_index.size(); ++s)
       if (t >= t_discard - 1e-12) fft_data[s].push_back(v[fft_index[s]]);
-    if (k_ % frame_every_ == 0 && missing_pose.empty()) {
+    if (k_ % frame_every_ == 0 && missing_pose.empty() && missing_ecc.empty()) {
       frame_t.push_back(t);
       for (size_t b = 0; b < pose_index.size(); ++b) {
         const auto& p = pose_index[b];
         poses[b].push_back({v[p[0]], v[p[1]], p[2] >= 0 ? v[p[2]] : 0.0});
       }
-      if (missing_ecc.empty())
-        for (size_t c = 0; c < ecc_index.size(); ++c) eccentricity[c].push_back(ecc(c, v));
+      for (size_t c = 0; c < ecc_index.size(); ++c) eccentricity[c].push_back(ecc(c, v));
     }
     if (k_ % orbit_every_ == 0 && missing_ecc.empty())
       for (size_t c = 0; c < ecc_index.size(); ++c) orbit[c].push_back(ecc(c, v));
@@ -1021,11 +1021,12 @@ RunAnalysis analyze_recorded_run(const Model& model, const AnalysisOptions& o, R
   sa.angle0 = o.stats_angle0;
   sa.angle1 = o.stats_angle1;
   if (!sa.missing_pose.empty())
-    prov.skipped.push_back("animation frames: positions of " + sa.missing_pose.front() +
+    prov.skipped.push_back("animation frames: the pose (x, y, phi) of " + sa.missing_pose.front() +
                            (sa.missing_pose.size() > 1 ? " and others" : "") + " not written");
   if (!sa.missing_ecc.empty())
-    prov.skipped.push_back("journal orbits: " + sa.missing_ecc.front() +
-                           ".ex/ey not written (lash run --channels)");
+    prov.skipped.push_back("journal orbits" +
+                           std::string(sa.missing_pose.empty() ? " and animation frames" : "") +
+                           ": " + sa.missing_ecc.front() + ".ex/ey not written (lash run --channels)");
   std::vector<PhasePortrait> kept;
   for (const auto& ph : p.phase) {
     if (sa.index(ph.x) >= 0 && sa.index(ph.y) >= 0)
