@@ -224,14 +224,26 @@ TEST(Cli, ReportAndAnalyzeAnEarlierRun) {
   r = run_lash("analyze " + fs::temp_directory_path().string());
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.out.find("not a folder written by `lash run`"), std::string::npos) << r.out;
-  // lash report writes the page and the data beside the run's results.
-  r = run_lash("report " + dir.string());
+  // lash report writes the page and the data beside the run's results. It takes analyze's
+  // options and applies them to the data the page and figures read; the same options give
+  // analyze the same verdict.
+  const std::string options = " --discard 0 --no-lyapunov --fft slider.ax";
+  r = run_lash("report " + dir.string() + options);
   EXPECT_EQ(r.code, 0) << r.out;
   EXPECT_TRUE(fs::exists(dir / "report.html"));
   EXPECT_TRUE(fs::exists(dir / "report_data.json"));
   const std::string html = lash::test::read_file((dir / "report.html").string());
   EXPECT_EQ(html.find("__LASH_REPORT_DATA__"), std::string::npos);
   EXPECT_NE(html.find("\"flores_slider_crank\""), std::string::npos);
+  const auto data = nlohmann::json::parse(std::ifstream(dir / "report_data.json"))["analysis"];
+  EXPECT_EQ(data["poincare"]["discarded_periods"], 0);
+  EXPECT_EQ(data["poincare"]["points"].size(), 3u);  // sections at 0, T and 2T
+  EXPECT_TRUE(data["lyapunov"].is_null()) << data["lyapunov"];
+  EXPECT_EQ(data["spectra"].size(), 1u);
+  EXPECT_TRUE(data["spectra"].contains("slider.ax"));
+  r = run_lash("analyze " + dir.string() + options);
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_EQ(nlohmann::json::parse(std::ifstream(dir / "analysis.json"))["verdict"], data["verdict"]);
   fs::remove_all(dir);
 }
 
@@ -559,6 +571,7 @@ TEST(Cli, AFolderHoldsOneRunAtATime) {
   EXPECT_EQ(second.code, 2) << second.out;
   EXPECT_NE(second.out.find("is in use by another lash (process "), std::string::npos) << second.out;
   EXPECT_EQ(analyze.code, 2) << analyze.out;
+  EXPECT_NE(analyze.out.find("is in use by another lash (process "), std::string::npos) << analyze.out;
   // The first run's results are whole and its own.
   const auto summary = read_summary(dir);
   EXPECT_EQ(summary["status"]["outcome"], "completed");
@@ -620,6 +633,75 @@ TEST(Cli, ADamagedRunFolderIsNamedNotReported) {
   EXPECT_NE(r.out.find("summary.json: damaged (not valid JSON"), std::string::npos) << r.out;
   EXPECT_FALSE(fs::exists(dir / "report.html"));
   EXPECT_FALSE(fs::exists(dir / "analysis.json"));
+  std::ofstream(dir / "summary.json") << summary;
+
+  // Each damage class: the file is named, exit 2, and nothing is written (no report, no
+  // report_data.json, no analysis.json). The folder is restored between cases.
+  const std::string csv = lash::test::read_file((dir / "timeseries.csv").string());
+  const std::string events = lash::test::read_file((dir / "events.csv").string());
+  const size_t last_row = csv.rfind('\n', csv.size() - 2) + 1;
+  const size_t third_row = [&] {
+    size_t p = 0;
+    for (int i = 0; i < 3; ++i) p = csv.find('\n', p) + 1;
+    return p;
+  }();
+  auto with_field = [&](const std::string& field) {  // the third row's second field replaced
+    std::string t = csv;
+    const size_t a = t.find(',', third_row) + 1;
+    return t.replace(a, t.find(',', a) - a, field);
+  };
+  auto interrupted = [&] {
+    auto j = nlohmann::json::parse(summary);
+    j["status"]["outcome"] = "interrupted";
+    return j.dump(2);
+  };
+  struct Case {
+    std::string what, file, text, message;
+  };
+  const std::vector<Case> cases = {
+      {"last row cut in half", "timeseries.csv", csv.substr(0, last_row + (csv.size() - last_row) / 2),
+       "timeseries.csv:" + std::to_string(line_count(dir / "timeseries.csv")) + ": the last row is cut (no line end)"},
+      {"last row missing", "timeseries.csv", csv.substr(0, last_row), "timeseries.csv: 300 rows, summary.json says 301: cut or edited"},
+      {"a field missing", "timeseries.csv", with_field("1,2").replace(with_field("1,2").find("1,2"), 4, ""),
+       "timeseries.csv:4: "},
+      {"an extra field", "timeseries.csv", with_field("1,2"), "timeseries.csv:4: more than"},
+      {"not a number", "timeseries.csv", with_field("abc"), "timeseries.csv:4:"},
+      {"events cut", "events.csv", events.substr(0, events.size() - 3), "events.csv:"},
+      {"summary of an interrupted run", "summary.json", interrupted(),
+       "summary.json: the run did not complete (status.outcome interrupted"},
+  };
+  for (const Case& c : cases) {
+    std::ofstream(dir / c.file) << c.text;
+    for (const char* command : {"report", "analyze"}) {
+      r = run_lash(std::string(command) + " " + dir.string());
+      EXPECT_EQ(r.code, 2) << c.what << "\n" << r.out;
+      EXPECT_NE(r.out.find(c.message), std::string::npos) << c.what << "\n" << r.out;
+      EXPECT_EQ(r.out.find("wrote"), std::string::npos) << c.what << "\n" << r.out;
+      for (const char* f : {"report.html", "report_data.json", "analysis.json", "figures"})
+        EXPECT_FALSE(fs::exists(dir / f)) << c.what << ": " << f;
+    }
+    std::ofstream(dir / "timeseries.csv") << csv;
+    std::ofstream(dir / "events.csv") << events;
+    std::ofstream(dir / "summary.json") << summary;
+  }
+  // A file missing.
+  for (const char* f : {"events.csv", "timeseries.csv", "final_state.json", "summary.json"}) {
+    const std::string keep = lash::test::read_file((dir / f).string());
+    fs::remove(dir / f);
+    r = run_lash("report " + dir.string());
+    EXPECT_EQ(r.code, 2) << f << "\n" << r.out;
+    EXPECT_NE(r.out.find((dir / f).string() + ": missing"), std::string::npos) << f << "\n" << r.out;
+    EXPECT_FALSE(fs::exists(dir / "report.html"));
+    std::ofstream(dir / f) << keep;
+  }
+  // The folder restored: the report reads it and says what it simulated again.
+  r = run_lash("report " + dir.string());
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("read: time series: timeseries.csv (301 rows"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("simulated now: ideal twin"), std::string::npos) << r.out;
+  const auto data = nlohmann::json::parse(std::ifstream(dir / "report_data.json"));
+  EXPECT_FALSE(data["provenance"]["read"].empty());
+  EXPECT_FALSE(data["provenance"]["resimulated"].empty());
   fs::remove_all(dir);
 }
 
@@ -913,3 +995,24 @@ TEST(Cli, Hdf5SelectedChannelsAndAnInterruptedRun) {
   fs::remove_all(dir);
 }
 #endif
+
+TEST(Cli, AnHdf5RunIsCheckedThenRunAgainAndSaysSo) {
+  // timeseries.h5 is not read yet: the folder is checked as any other (an edited model is
+  // refused), then the model runs again, and the output says so.
+  const fs::path dir = temp_dir("h5_report");
+  Result r = run_lash("run " + example() + " -q --set solver.end_time=0.003 --format hdf5 -o " + dir.string());
+  if (r.code == 2 && r.out.find("without HDF5") != std::string::npos) GTEST_SKIP() << "no HDF5";
+  ASSERT_EQ(r.code, 0) << r.out;
+  r = run_lash("analyze " + dir.string() + " --no-lyapunov");
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("simulated now: the main run: timeseries.h5"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("read: "), std::string::npos) << r.out;
+  const std::string model = lash::test::read_file((dir / "model_resolved.yaml").string());
+  std::ofstream(dir / "model_resolved.yaml") << model << "# edited\n";
+  fs::remove(dir / "analysis.json");
+  r = run_lash("analyze " + dir.string());
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("model_resolved.yaml: differs from the model this run used"), std::string::npos) << r.out;
+  EXPECT_FALSE(fs::exists(dir / "analysis.json"));
+  fs::remove_all(dir);
+}

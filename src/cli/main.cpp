@@ -19,6 +19,7 @@
 #include "io/model_loader.hpp"
 #include "io/report.hpp"
 #include "io/results_writer.hpp"
+#include "io/run_folder.hpp"
 #include "io/state_file.hpp"
 #include "study/run_analysis.hpp"
 
@@ -107,35 +108,6 @@ int exit_code(lash::RunOutcome o) {
   return kExitNumerical;
 }
 
-/// A run folder about to be read by `report` or `analyze` (its model_resolved.yaml checked to exist
-/// before the folder is locked): when the run's summary.json is there, the model in it must be
-/// the one in model_resolved.yaml
-/// (an edited model would give a report of a run that never happened). Returns "" or the problem.
-std::string check_run_folder(const std::string& dir) {
-  namespace fs = std::filesystem;
-  const std::string model = dir + "/model_resolved.yaml", summary = dir + "/summary.json";
-  if (!fs::exists(summary)) return "";  // a run killed before its end: the model alone is enough
-  nlohmann::json j;
-  std::string model_text;
-  try {
-    j = nlohmann::json::parse(lash::read_input_file(summary, lash::kMaxModelFileBytes));
-    model_text = lash::read_input_file(model, lash::kMaxModelFileBytes);
-  } catch (const nlohmann::json::exception& e) {
-    return summary + ": damaged (not valid JSON: " + e.what() + "); run the model again";
-  } catch (const std::exception& e) {
-    return e.what();
-  }
-  const auto* resolved = j.is_object() && j.contains("model") && j["model"].is_object() &&
-                                 j["model"].contains("resolved") && j["model"]["resolved"].is_string()
-                             ? &j["model"]["resolved"]
-                             : nullptr;
-  if (!resolved) return summary + ": damaged (no model.resolved); run the model again";
-  if (resolved->get<std::string>() + "\n" != model_text)
-    return model + ": differs from the model this run used (summary.json model.resolved): edited "
-                   "after the run? Run the edited model with `lash run` instead";
-  return "";
-}
-
 int report_model_error(const lash::ModelError& e) {
   for (const auto& d : e.diagnostics()) std::cerr << d.str() << "\n";
   std::cerr << e.diagnostics().size() << " problem" << (e.diagnostics().size() == 1 ? "" : "s")
@@ -188,8 +160,9 @@ int main(int argc, char** argv) {
 
   std::string run_dir;
   auto* report = app.add_subcommand(
-      "report", "Analyse an earlier run folder (re-running its model_resolved.yaml) and write "
-                "report.html, report_data.json and figures/ into it");
+      "report", "Analyse an earlier run folder from the files the run wrote (simulating only "
+                "the ideal twin and the Lyapunov trajectories) and write report.html, "
+                "report_data.json and figures/ into it");
   report->add_option("folder", run_dir, "A folder written by `lash run` (or by `lash sweep`: its study_report.html)")
       ->required()
       ->check(CLI::ExistingDirectory);
@@ -204,19 +177,26 @@ int main(int argc, char** argv) {
   std::vector<std::string> fft_channels;
   bool no_lyapunov = false;
   int discard_periods = 1;
-  analyze->add_option("--poincare", poincare_driver,
-                      "Stroboscopic Poincaré section once per period of this constant-speed "
-                      "driver (default: the first one)");
-  analyze->add_option("--fft", fft_channels, "Amplitude spectrum of these channels, e.g. slider.ax")
-      ->take_all();
-  analyze->add_flag("--no-lyapunov", no_lyapunov,
-                    "Skip the largest Lyapunov exponent (two trajectories; computed by default, as "
-                    "by `report`, since the verdict needs it)");
   std::vector<std::string> planes;
-  analyze->add_option("--plane", planes,
-                      "Event-based Poincaré section instead of the stroboscopic one: "
-                      "<body>.<x|y|phi|vx|vy|omega>=VALUE[,down], e.g. slider.vx=0,down");
-  analyze->add_option("--discard", discard_periods, "Transient periods to discard (default 1)");
+  double lyapunov_d0 = 0.0;
+  // The analysis options: the same on both commands, applied to every part of the analyses
+  // (report.html and figures read the same data as analysis.json).
+  for (auto* sub : {report, analyze}) {
+    sub->add_option("--poincare", poincare_driver,
+                    "Stroboscopic Poincaré section once per period of this constant-speed "
+                    "driver (default: the first one)");
+    sub->add_option("--fft", fft_channels, "Amplitude spectrum of these channels, e.g. slider.ax")
+        ->take_all();
+    sub->add_flag("--no-lyapunov", no_lyapunov,
+                  "Skip the largest Lyapunov exponent (two trajectories; computed by default, "
+                  "since the verdict needs it)");
+    sub->add_option("--plane", planes,
+                    "Event-based Poincaré section instead of the stroboscopic one: "
+                    "<body>.<x|y|phi|vx|vy|omega>=VALUE[,down], e.g. slider.vx=0,down");
+    sub->add_option("--discard", discard_periods, "Transient periods to discard (default 1)");
+    sub->add_option("--lyapunov-d0", lyapunov_d0,
+                    "Separation of the two trajectories, m (default 2e-4 x clearance, <= 1e-7)");
+  }
   std::vector<double> window, angle_range;
   for (auto* sub : {report, analyze}) {
     sub->add_option("--window", window, "Statistics over this time window, T0,T1 (s)")
@@ -233,9 +213,6 @@ int main(int argc, char** argv) {
                     "Period of the motion, s: sections, crank angle and exponent for a model whose "
                     "driver is an expression (default: a constant-speed driver's, else the "
                     "driver's mean speed over the run's last half)");
-  double lyapunov_d0 = 0.0;
-  analyze->add_option("--lyapunov-d0", lyapunov_d0,
-                      "Separation of the two trajectories, m (default 2e-4 x clearance, <= 1e-7)");
 
   auto* check = app.add_subcommand("check", "Validate a model: list every problem with file:line:column");
   check->add_option("model", model_path, "Model file (YAML)")->required()->check(CLI::ExistingFile);
@@ -289,10 +266,6 @@ int main(int argc, char** argv) {
       std::cerr << "error: " << e.what() << "\n";
       return kExitBadInput;
     }
-    if (const std::string problem = check_run_folder(run_dir); !problem.empty()) {
-      std::cerr << "error: " << problem << "\n";
-      return kExitBadInput;
-    }
   }
   lash::LoadedModel loaded;
   try {
@@ -323,13 +296,11 @@ int main(int argc, char** argv) {
     ro.period = period;
     if (window.size() == 2) ro.stats_t0 = window[0], ro.stats_t1 = window[1];
     if (angle_range.size() == 2) ro.stats_angle0 = angle_range[0], ro.stats_angle1 = angle_range[1];
-    if (*analyze) {
-      ro.lyapunov = !no_lyapunov;
-      ro.poincare_driver = poincare_driver;
-      ro.fft_channels = fft_channels;
-      ro.lyapunov_d0 = lyapunov_d0;
-      ro.section_planes = planes;
-    }
+    ro.lyapunov = !no_lyapunov;
+    ro.poincare_driver = poincare_driver;
+    ro.fft_channels = fft_channels;
+    ro.lyapunov_d0 = lyapunov_d0;
+    ro.section_planes = planes;
     install_signal_handlers();
     ro.interrupt = &g_interrupt;
     try {
@@ -338,9 +309,33 @@ int main(int argc, char** argv) {
       std::cerr << "error: " << e.what() << "\n";
       return kExitBadInput;
     }
+    // What the run wrote, checked before anything is simulated: a damaged folder is refused
+    // naming the file (exit 2), one that cannot be read is an I/O error (exit 3).
+    lash::RecordedRun recorded;
+    try {
+      recorded = lash::read_run_folder(run_dir, model);
+    } catch (const lash::IoError& e) {
+      std::cerr << "error: " << e.what() << "\n";
+      return kExitIo;
+    } catch (const std::exception& e) {
+      std::cerr << "error: " << e.what() << "\n";
+      return kExitBadInput;
+    }
     try {
       ProgressObserver progress(nullptr, isatty(STDERR_FILENO));
-      const lash::RunAnalysis ra = lash::analyze_run(model, ro, &progress);
+      lash::RunAnalysis ra;
+      if (recorded.next_row) {
+        ra = lash::analyze_recorded_run(model, ro, recorded);
+      } else {  // timeseries.h5 is not read yet: the main run is made again
+        ra = lash::analyze_run(model, ro, &progress);
+        ra.provenance.read.clear();
+        ra.provenance.resimulated.insert(ra.provenance.resimulated.begin(),
+                                         "the main run: timeseries.h5 (lash run --format hdf5) "
+                                         "is not read yet, so the model was run again");
+      }
+      for (const auto& line : ra.provenance.read) std::cout << "read: " << line << "\n";
+      for (const auto& line : ra.provenance.resimulated) std::cout << "simulated now: " << line << "\n";
+      for (const auto& line : ra.provenance.skipped) std::cout << "skipped: " << line << "\n";
       if (const int sig = g_interrupt.load(); sig != 0) {  // during the run or the analyses
         std::cerr << "\ninterrupted by signal " << sig << "; nothing was written\n";
         return kExitInterrupted;

@@ -145,6 +145,10 @@ json report_data(const Model& model, const RunAnalysis& a) {
                      {"events", r.stats.events},
                      {"wall_seconds", r.wall_seconds}, {"outputs", r.outputs}};
   d["max_constraint_violation"] = r.max_constraint_violation;
+  // Which parts were read from what the run wrote and which were simulated now.
+  d["provenance"] = {{"read", a.provenance.read},
+                     {"resimulated", a.provenance.resimulated},
+                     {"skipped", a.provenance.skipped}};
 
   // Series (decimated) and the ideal twin on the same time base.
   json series;

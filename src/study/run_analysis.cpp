@@ -97,70 +97,206 @@ struct JointEvents {
   bool in_contact_at_start = false;
 };
 
-/// The main run's observer: forwards to `extra` and collects the analyses' inputs.
-class Collector : public Observer {
+/// A section point from a row of channel values: (ex, ey) of every clearance joint, else each
+/// body's x, y and a 1 cm lever (cos φ, sin φ) (angles mod 2π, comparable to positions).
+class SectionPoint {
  public:
-  Collector(const Model& m, const Workspace& ws, const AnalysisOptions& o, size_t n_out,
-            Observer* extra)
-      : model_(m), channels(channel_info(m, ws)), v_(channels.size()),
+  SectionPoint(const Model& m, const std::vector<int>& clearance_joints,
+               const std::vector<ChannelInfo>& cols) {
+    auto index = [&](const std::string& name) {
+      for (size_t i = 0; i < cols.size(); ++i)
+        if (cols[i].name == name) return static_cast<int>(i);
+      return -1;
+    };
+    for (int j : clearance_joints) {
+      ecc_.push_back({index(m.joints[j].name + ".ex"), index(m.joints[j].name + ".ey")});
+      complete_ = complete_ && ecc_.back()[0] >= 0 && ecc_.back()[1] >= 0;
+    }
+    if (ecc_.empty())
+      for (const auto& b : m.bodies) {
+        pose_.push_back({index(b.name + ".x"), index(b.name + ".y"), index(b.name + ".phi")});
+        complete_ = complete_ && pose_.back()[0] >= 0 && pose_.back()[1] >= 0 &&
+                    (pose_.back()[2] >= 0 || !b.rotates());
+      }
+  }
+  /// Whether the columns hold every coordinate of a point.
+  bool complete() const { return complete_; }
+  std::vector<double> at(const double* v) const {
+    std::vector<double> p;
+    for (const auto& e : ecc_) {
+      p.push_back(v[e[0]]);
+      p.push_back(v[e[1]]);
+    }
+    for (const auto& q : pose_) {
+      const double phi = q[2] >= 0 ? v[q[2]] : 0.0;
+      p.push_back(v[q[0]]);
+      p.push_back(v[q[1]]);
+      p.push_back(std::cos(phi) * 1e-2);
+      p.push_back(std::sin(phi) * 1e-2);
+    }
+    return p;
+  }
+
+ private:
+  std::vector<std::array<int, 2>> ecc_;
+  std::vector<std::array<int, 3>> pose_;
+  bool complete_ = true;
+};
+
+/// The analyses' inputs gathered from the main run's outputs one row at a time: fed by an
+/// observer of the run (Collector) or by the rows a run wrote to its folder
+/// (analyze_recorded_run), so both paths go through this one piece of code. `channels` are the
+/// columns of a row: every channel of the model during a run, those the run wrote otherwise.
+/// Poses, eccentricities and section points are read from the channels (body x, y, phi; joint
+/// ex, ey), so they are the same numbers whichever way the rows came.
+class SampleAnalysis {
+ public:
+  SampleAnalysis(const Model& m, std::vector<ChannelInfo> cols, const AnalysisOptions& o,
+                 size_t n_out, const std::vector<int>& clearance_joints)
+      : channels(std::move(cols)),
         dec(channels.size(), (n_out + o.display_points - 1) / o.display_points),
-        stats(channels.size()), extra_(extra) {
+        stats(channels.size()) {
     frame_every_ = std::max<size_t>(1, n_out / std::max<size_t>(1, o.frames));
     orbit_every_ = std::max<size_t>(1, n_out / 4000);
     for (auto& s : stats) s.t0 = o.stats_t0, s.t1 = o.stats_t1;
-    events.resize(ws.nc);
-    orbit.resize(ws.nc);
-    poses.resize(ws.nb);
-    eccentricity.resize(ws.nc);
+    const int nc = static_cast<int>(clearance_joints.size());
+    events.resize(nc);
+    orbit.resize(nc);
+    eccentricity.resize(nc);
+    // Columns of the poses (φ = 0 for a point mass, which has no angle) and eccentricities.
+    for (const auto& b : m.bodies) {
+      pose_index.push_back({index(b.name + ".x"), index(b.name + ".y"), index(b.name + ".phi")});
+      const auto& q = pose_index.back();
+      if (q[0] < 0 || q[1] < 0 || (q[2] < 0 && b.rotates())) missing_pose.push_back(b.name);
+    }
+    poses.resize(m.bodies.size());
+    for (int c = 0; c < nc; ++c) {
+      const std::string& n = m.joints[clearance_joints[c]].name;
+      ecc_index.push_back({index(n + ".ex"), index(n + ".ey")});
+      if (ecc_index.back()[0] < 0 || ecc_index.back()[1] < 0) missing_ecc.push_back(n);
+    }
   }
   int index(const std::string& name) const {
     for (size_t i = 0; i < channels.size(); ++i)
       if (channels[i].name == name) return static_cast<int>(i);
     return -1;
   }
-  std::string stop_reason() const override { return extra_ ? extra_->stop_reason() : std::string(); }
-  void output(double t, const Eigen::VectorXd& y, const Workspace& ws) override {
-    if (extra_) extra_->output(t, y, ws);
-    channel_values(model_, ws, y, v_.data());
-    if (k_ == 0)
-      for (int c = 0; c < ws.nc; ++c) events[c].in_contact_at_start = ws.contact[c].in_contact;
-    dec.add(t, v_);
-    if (angle_driver) angle_deg.push_back(driver_angle_deg(model_, ws, *angle_driver, t, y.data()));
-    if (in_angle_range(t))
-      for (size_t i = 0; i < v_.size(); ++i) stats[i].add(t, v_[i]);
+  /// One output row; `angle_deg` is the period driver's angle (NaN without one).
+  void output(double t, const double* v, double angle_deg) {
+    dec.add(t, std::vector<double>(v, v + channels.size()));
+    if (!std::isnan(angle_deg)) angle.push_back(angle_deg);
+    if (in_angle_range(angle_deg))
+      for (size_t i = 0; i < channels.size(); ++i) stats[i].add(t, v[i]);
     if (twin) {
-      for (size_t i = 0; i < v_.size(); ++i) {
+      for (size_t i = 0; i < channels.size(); ++i) {
         const int ti = twin_index[i];
         if (ti < 0 || k_ >= twin->data[ti].size()) continue;
-        const double d = v_[i] - twin->data[ti][k_];
+        const double d = v[i] - twin->data[ti][k_];
         dev_sq[i] += d * d;
         dev_max[i] = std::max(dev_max[i], std::abs(d));
         ++dev_n[i];
       }
     }
     for (size_t s = 0; s < fft_index.size(); ++s)
-      if (t >= t_discard - 1e-12) fft_data[s].push_back(v_[fft_index[s]]);
-    if (k_ % frame_every_ == 0) {
+      if (t >= t_discard - 1e-12) fft_data[s].push_back(v[fft_index[s]]);
+    if (k_ % frame_every_ == 0 && missing_pose.empty() && missing_ecc.empty()) {
       frame_t.push_back(t);
-      for (int b = 0; b < ws.nb; ++b)  // x, y, φ per body (φ = 0 for a point mass)
-        poses[b].push_back({ws.kin[b].r.x(), ws.kin[b].r.y(), ws.kin[b].phi});
-      for (int c = 0; c < ws.nc; ++c) eccentricity[c].push_back(ws.clearance_out[c].e);
+      for (size_t b = 0; b < pose_index.size(); ++b) {
+        const auto& p = pose_index[b];
+        poses[b].push_back({v[p[0]], v[p[1]], p[2] >= 0 ? v[p[2]] : 0.0});
+      }
+      for (size_t c = 0; c < ecc_index.size(); ++c) eccentricity[c].push_back(ecc(c, v));
     }
-    if (k_ % orbit_every_ == 0)
-      for (int c = 0; c < ws.nc; ++c) orbit[c].push_back(ws.clearance_out[c].e);
+    if (k_ % orbit_every_ == 0 && missing_ecc.empty())
+      for (size_t c = 0; c < ecc_index.size(); ++c) orbit[c].push_back(ecc(c, v));
     ++k_;
   }
-  bool in_angle_range(double t) const {
-    if (!angle_driver || std::isnan(angle0) || std::isnan(angle1)) return true;
-    const double deg = angle_deg.empty() ? 0.0 : angle_deg.back();
+  void event(int c, double t, bool onset, double velocity) {
+    JointEvents& je = events[c];
+    je.t.push_back(t);
+    je.v.push_back(velocity);
+    je.onset.push_back(onset);
+  }
+  /// A section point at time t (SectionPoint), kept after the transient.
+  void section(double t, std::vector<double> p) {
+    if (t < t_discard - 1e-12) return;
+    sections.push_back(std::move(p));
+    section_t.push_back(t);
+  }
+
+  std::vector<ChannelInfo> channels;
+  Decimator dec;
+  std::vector<ChannelStats> stats;
+  const Keeper* twin = nullptr;
+  std::vector<int> twin_index;
+  std::vector<double> dev_sq, dev_max;
+  std::vector<long> dev_n;
+  std::vector<int> fft_index;
+  std::vector<std::vector<double>> fft_data;
+  double t_discard = 0.0;
+  double angle0 = std::nan(""), angle1 = std::nan("");
+  std::vector<double> angle;  ///< the period driver's angle at every output, deg
+  std::vector<double> frame_t;
+  std::vector<std::vector<std::array<double, 3>>> poses;
+  std::vector<std::vector<Vec2>> eccentricity;
+  std::vector<std::vector<Vec2>> orbit;
+  std::vector<JointEvents> events;
+  std::vector<std::vector<double>> sections;
+  std::vector<double> section_t;
+  std::vector<std::array<int, 3>> pose_index;  ///< columns of x, y, phi per body (−1: absent)
+  std::vector<std::array<int, 2>> ecc_index;   ///< columns of ex, ey per clearance joint
+  std::vector<std::string> missing_pose, missing_ecc;  ///< bodies and joints without their columns
+
+ private:
+  Vec2 ecc(size_t c, const double* v) const { return {v[ecc_index[c][0]], v[ecc_index[c][1]]}; }
+  bool in_angle_range(double deg) const {
+    if (std::isnan(deg) || std::isnan(angle0) || std::isnan(angle1)) return true;
     return angle0 <= angle1 ? (deg >= angle0 && deg <= angle1) : (deg >= angle0 || deg <= angle1);
+  }
+  size_t frame_every_ = 1, orbit_every_ = 1, k_ = 0;
+};
+
+/// An observer of the main run (or of a run made again for what its folder lacks): hands the
+/// outputs, events and sections to a SampleAnalysis as rows of channel values, forwards to
+/// `extra`, and keeps the state at the first section after the transient (where the Lyapunov
+/// trajectories start).
+class Collector : public Observer {
+ public:
+  Collector(const Model& m, const Workspace& ws, SampleAnalysis& sa, Observer* extra)
+      : model_(m), sa_(sa), extra_(extra) {
+    // The SampleAnalysis' columns among the model's channels (all of them during a run).
+    const std::vector<ChannelInfo> all = channel_info(m, ws);
+    point_ = std::make_unique<SectionPoint>(m, std::vector<int>(ws.clearance_joints.begin(),
+                                                                ws.clearance_joints.begin() + ws.nc),
+                                            all);
+    v_.resize(all.size());
+    for (const auto& c : sa.channels)
+      for (size_t i = 0; i < all.size(); ++i)
+        if (all[i].name == c.name) pick_.push_back(i);
+    row_.resize(pick_.size());
+  }
+  bool feed_outputs = true;         ///< outputs and events to the SampleAnalysis
+  bool feed_sections = true;        ///< sections to the SampleAnalysis
+  bool stop_at_lyapunov_start = false;  ///< stop the run once the start state is kept
+  const Driver* angle_driver = nullptr;
+
+  std::string stop_reason() const override {
+    if (stop_at_lyapunov_start && have_lyapunov_start) return "the start state is kept";
+    return extra_ ? extra_->stop_reason() : std::string();
+  }
+  void output(double t, const Eigen::VectorXd& y, const Workspace& ws) override {
+    if (extra_) extra_->output(t, y, ws);
+    if (!feed_outputs) return;
+    channel_values(model_, ws, y, v_.data());
+    if (first_)
+      for (int c = 0; c < ws.nc; ++c) sa_.events[c].in_contact_at_start = ws.contact[c].in_contact;
+    first_ = false;
+    sa_.output(t, row(),
+               angle_driver ? driver_angle_deg(model_, ws, *angle_driver, t, y.data()) : std::nan(""));
   }
   void event(const ContactEvent& e, const Workspace& ws) override {
     if (extra_) extra_->event(e, ws);
-    JointEvents& je = events[e.clearance];
-    je.t.push_back(e.t);
-    je.v.push_back(e.velocity);
-    je.onset.push_back(e.onset);
+    if (feed_outputs) sa_.event(e.clearance, e.t, e.onset, e.velocity);
   }
   void progress(double t, double t_end) override {
     if (extra_) extra_->progress(t, t_end);
@@ -172,58 +308,98 @@ class Collector : public Observer {
   }
   void section(double t, const Eigen::VectorXd& y, const Workspace& ws) override {
     if (extra_) extra_->section(t, y, ws);
-    if (t < t_discard - 1e-12) return;
+    if (t < sa_.t_discard - 1e-12) return;
     if (!have_lyapunov_start) {
       lyapunov_start = y;
       lyapunov_t0 = t;
       have_lyapunov_start = true;
     }
-    std::vector<double> p;
-    for (int c = 0; c < ws.nc; ++c) {
-      p.push_back(ws.clearance_out[c].e.x());
-      p.push_back(ws.clearance_out[c].e.y());
-    }
-    if (ws.nc == 0)  // no clearance joint: the bodies' positions, angles as cos/sin (mod 2π)
-      for (int b = 0; b < ws.nb; ++b) {
-        const BodyKin k = body_kin(ws, b, y.data());
-        p.push_back(k.r.x());
-        p.push_back(k.r.y());
-        p.push_back(std::cos(k.phi) * 1e-2);  // 1 cm lever: comparable to positions
-        p.push_back(std::sin(k.phi) * 1e-2);
-      }
-    sections.push_back(std::move(p));
-    section_t.push_back(t);
+    if (!feed_sections) return;
+    channel_values(model_, ws, y, v_.data());
+    sa_.section(t, point_->at(v_.data()));
   }
 
-  const Model& model_;
-  std::vector<ChannelInfo> channels;
-  std::vector<double> v_;
-  Decimator dec;
-  std::vector<ChannelStats> stats;
-  const Keeper* twin = nullptr;
-  std::vector<int> twin_index;
-  std::vector<double> dev_sq, dev_max;
-  std::vector<long> dev_n;
-  std::vector<int> fft_index;
-  std::vector<std::vector<double>> fft_data;
-  double t_discard = 0.0;
-  const Driver* angle_driver = nullptr;
-  std::vector<double> angle_deg;  ///< the angle driver's angle at every output, deg
-  double angle0 = std::nan(""), angle1 = std::nan("");
-  std::vector<double> frame_t;
-  std::vector<std::vector<std::array<double, 3>>> poses;
-  std::vector<std::vector<Vec2>> eccentricity;
-  std::vector<std::vector<Vec2>> orbit;
-  std::vector<JointEvents> events;
-  std::vector<std::vector<double>> sections;
-  std::vector<double> section_t;
   Eigen::VectorXd lyapunov_start;
   double lyapunov_t0 = 0.0;
   bool have_lyapunov_start = false;
 
  private:
+  /// The SampleAnalysis' columns of the channel values in v_.
+  const double* row() {
+    if (pick_.size() == v_.size()) return v_.data();  // every channel, in order
+    for (size_t i = 0; i < pick_.size(); ++i) row_[i] = v_[pick_[i]];
+    return row_.data();
+  }
+  const Model& model_;
+  SampleAnalysis& sa_;
+  std::vector<double> v_, row_;
+  std::vector<size_t> pick_;
+  std::unique_ptr<SectionPoint> point_;  ///< over every channel
   Observer* extra_;
-  size_t frame_every_ = 1, orbit_every_ = 1, k_ = 0;
+  bool first_ = true;
+};
+
+/// Stroboscopic sections at k·T from output rows: each section's point by cubic Lagrange
+/// interpolation through the four outputs around it (two before, two after; the last four at
+/// the end of the run), exact on an output time. Its error is estimated as the largest
+/// difference between the cubic and the two quadratics through three of the four outputs (the
+/// size of the cubic term): O(Δt³) where the motion is smooth, large where a contact rings
+/// between outputs. `largest_estimate()` is the worst over all sections, in the points' units (m).
+class SectionInterpolator {
+ public:
+  SectionInterpolator(SampleAnalysis& sa, const SectionPoint& point, double period, size_t width)
+      : sa_(sa), point_(point), period_(period), width_(width) {}
+  void row(double t, const double* v) {
+    rows_.push_back({t, std::vector<double>(v, v + width_)});
+    if (rows_.size() > 4) rows_.erase(rows_.begin());
+    if (rows_.size() < 4) return;
+    // Every section up to the third row: between the middle two rows once the run is under way.
+    while (k_ * period_ <= rows_[2].first * (1 + 1e-12)) emit(k_++ * period_);
+  }
+  /// After the last row: the sections left up to its time, through the last rows.
+  void finish() {
+    if (rows_.empty()) return;
+    while (k_ * period_ <= rows_.back().first * (1 + 1e-12)) emit(k_++ * period_);
+  }
+  double largest_estimate() const { return estimate_; }
+  /// Sections that fell on an output time (taken from the row, not interpolated), and all.
+  long on_outputs() const { return on_outputs_; }
+  long sections() const { return k_; }
+
+ private:
+  /// The point at ts by Lagrange interpolation through rows [a, b).
+  std::vector<double> through(double ts, int a, int b) const {
+    std::vector<double> v(width_, 0.0);
+    for (int i = a; i < b; ++i) {
+      double w = 1.0;
+      for (int j = a; j < b; ++j)
+        if (j != i) w *= (ts - rows_[j].first) / (rows_[i].first - rows_[j].first);
+      for (size_t c = 0; c < width_; ++c) v[c] += w * rows_[i].second[c];
+    }
+    return point_.at(v.data());
+  }
+  void emit(double ts) {
+    for (const auto& [t, v] : rows_)
+      if (std::abs(t - ts) <= 1e-12 * std::max(1.0, std::abs(ts))) {  // on an output time
+        sa_.section(ts, point_.at(v.data()));
+        ++on_outputs_;
+        return;
+      }
+    const int n = static_cast<int>(rows_.size());
+    std::vector<double> p = through(ts, 0, n);
+    if (n == 4)
+      for (const auto& q : {through(ts, 0, 3), through(ts, 1, 4)})
+        for (size_t i = 0; i < p.size(); ++i)
+          if (ts >= sa_.t_discard - 1e-12) estimate_ = std::max(estimate_, std::abs(q[i] - p[i]));
+    sa_.section(ts, std::move(p));
+  }
+  SampleAnalysis& sa_;
+  const SectionPoint& point_;
+  double period_;
+  size_t width_;
+  long k_ = 0, on_outputs_ = 0;
+  double estimate_ = 0.0;
+  std::vector<std::pair<double, std::vector<double>>> rows_;
 };
 
 /// Strong spectral peaks (> 10% of the largest) that are not within two bins of a harmonic of f0.
@@ -406,12 +582,31 @@ void check_options(const AnalysisOptions& o) {
         "default)");
 }
 
-RunAnalysis analyze_run(const Model& model, const AnalysisOptions& o, Observer* extra) {
+namespace {
+
+/// What both paths settle before the main run's rows: the period and its driver, the transient,
+/// the spectra, section planes and phase portraits asked for.
+struct Plan {
+  const Driver* drv = nullptr;
+  double period = 0.0;
+  std::string period_source;
+  double t_start = 0.0, t_discard = 0.0;
+  size_t n_out = 0, bucket = 1;
+  std::vector<ChannelInfo> channels;  ///< every channel of the model
+  std::vector<std::string> fft;
+  std::vector<SectionPlane> planes;
+  std::vector<PhasePortrait> phase;
+  std::vector<int> clearance_joints;  ///< joint indices, in the workspace's order
+  int free_coordinates = 0;
+};
+
+/// Checks the options and settles the plan; throws std::invalid_argument naming the option.
+Plan plan_analysis(const Model& model, const AnalysisOptions& o) {
   const SolverSettings& s = model.solver;
-  const double t_start = o.from ? o.from->t : 0.0;
-  const size_t n_out =
-      static_cast<size_t>(std::ceil((s.end_time - t_start) / s.output_interval - 1e-9)) + 1;
-  const size_t bucket = (n_out + o.display_points - 1) / o.display_points;
+  Plan p;
+  p.t_start = o.from ? o.from->t : 0.0;
+  p.n_out = static_cast<size_t>(std::ceil((s.end_time - p.t_start) / s.output_interval - 1e-9)) + 1;
+  p.bucket = (p.n_out + o.display_points - 1) / o.display_points;
 
   // The options first: nothing runs when one of them is out of range or names what does not exist.
   check_options(o);
@@ -422,135 +617,143 @@ RunAnalysis analyze_run(const Model& model, const AnalysisOptions& o, Observer* 
   // The period: a constant-speed driver's, else --period, else the mean speed of a rotary
   // expression driver (a start-up ramp) over the run's last half; the crank angle follows the
   // driver's prescribed motion in every case.
-  const Driver* drv = period_driver(model, o.poincare_driver);
-  if (!drv) drv = rotary_driver(model, o.poincare_driver);
-  if (!o.poincare_driver.empty() && !drv)
+  p.drv = period_driver(model, o.poincare_driver);
+  if (!p.drv) p.drv = rotary_driver(model, o.poincare_driver);
+  if (!o.poincare_driver.empty() && !p.drv)
     throw std::invalid_argument("--poincare " + o.poincare_driver +
                                 ": no revolute driver of that name");
-  double period = 0.0;
-  std::string period_source;
   if (o.period > 0) {
-    period = o.period;
-    period_source = "--period " + fmt_g(o.period) + " s";
-  } else if (drv && drv->profile == DriverProfile::constant_speed && drv->speed != 0.0) {
-    period = 2 * M_PI / std::abs(drv->speed);
-    period_source = "constant speed of driver '" + drv->name + "'";
-  } else if (drv) {
-    const double w = mean_driver_speed(model, *drv, 0.5 * s.end_time, s.end_time);
+    p.period = o.period;
+    p.period_source = "--period " + fmt_g(o.period) + " s";
+  } else if (p.drv && p.drv->profile == DriverProfile::constant_speed && p.drv->speed != 0.0) {
+    p.period = 2 * M_PI / std::abs(p.drv->speed);
+    p.period_source = "constant speed of driver '" + p.drv->name + "'";
+  } else if (p.drv) {
+    const double w = mean_driver_speed(model, *p.drv, 0.5 * s.end_time, s.end_time);
     if (std::isfinite(w)) {
-      period = 2 * M_PI / std::abs(w);
-      period_source = "mean speed of driver '" + drv->name + "' over the run's last half (t = " +
-                      fmt_g(0.5 * s.end_time) + " to " + fmt_g(s.end_time) + " s): " + fmt_g(w) +
-                      " rad/s";
+      p.period = 2 * M_PI / std::abs(w);
+      p.period_source = "mean speed of driver '" + p.drv->name +
+                        "' over the run's last half (t = " + fmt_g(0.5 * s.end_time) + " to " +
+                        fmt_g(s.end_time) + " s): " + fmt_g(w) + " rad/s";
     }
   }
-  if (!std::isnan(o.stats_angle0) && !drv)
+  if (!std::isnan(o.stats_angle0) && !p.drv)
     throw std::invalid_argument("--angle-range needs a revolute driver");
-  const double t_discard = t_start + (period > 0 ? o.discard_periods * period : 0.0);
+  p.t_discard = p.t_start + (p.period > 0 ? o.discard_periods * p.period : 0.0);
 
-  Workspace ws(model);
-  const std::vector<ChannelInfo> channels = channel_info(model, ws);
-  auto channel_index = [&](const std::string& name) {
-    for (size_t i = 0; i < channels.size(); ++i)
-      if (channels[i].name == name) return static_cast<int>(i);
-    return -1;
+  const Workspace ws(model);
+  p.channels = channel_info(model, ws);
+  p.clearance_joints.assign(ws.clearance_joints.begin(), ws.clearance_joints.begin() + ws.nc);
+  p.free_coordinates = ws.nq - ws.m;
+  auto known = [&](const std::string& name) {
+    for (const auto& c : p.channels)
+      if (c.name == name) return true;
+    return false;
   };
   // Spectra: the requested channels, else translational bodies' ax and each clearance Fn.
-  std::vector<std::string> fft = o.fft_channels;
-  if (fft.empty()) {
+  p.fft = o.fft_channels;
+  if (p.fft.empty()) {
     for (const auto& j : model.joints) {
       if (j.type == JointType::translational && j.b.body != kGround)
-        fft.push_back(model.bodies[j.b.body].name + ".ax");
-      if (j.clearance) fft.push_back(j.name + ".Fn");
+        p.fft.push_back(model.bodies[j.b.body].name + ".ax");
+      if (j.clearance) p.fft.push_back(j.name + ".Fn");
     }
   }
-  std::vector<int> fft_index;
-  for (const auto& f : fft) {
-    const int i = channel_index(f);
-    if (i < 0) throw std::invalid_argument("--fft " + f + ": no such channel");
-    fft_index.push_back(i);
-  }
-  std::vector<SectionPlane> planes;
-  for (const auto& spec : o.section_planes) planes.push_back(parse_section_plane(model, spec));
+  for (const auto& f : p.fft)
+    if (!known(f)) throw std::invalid_argument("--fft " + f + ": no such channel");
+  for (const auto& spec : o.section_planes) p.planes.push_back(parse_section_plane(model, spec));
   // Phase portraits: the requested pairs, else each clearance joint's ex–ey and δ–δ̇.
-  std::vector<PhasePortrait> phase;
   if (o.phase.empty()) {
-    for (int c = 0; c < ws.nc; ++c) {
-      const std::string& n = model.joints[ws.clearance_joints[c]].name;
-      phase.push_back({n + ".ex", n + ".ey"});
-      phase.push_back({n + ".delta", n + ".delta_dot"});
+    for (int j : p.clearance_joints) {
+      const std::string& n = model.joints[j].name;
+      p.phase.push_back({n + ".ex", n + ".ey"});
+      p.phase.push_back({n + ".delta", n + ".delta_dot"});
     }
   } else {
     for (const auto& [x, y] : o.phase) {
-      if (channel_index(x) < 0 || channel_index(y) < 0)
+      if (!known(x) || !known(y))
         throw std::invalid_argument("phase portrait " + x + "," + y + ": no such channel");
-      phase.push_back({x, y});
+      p.phase.push_back({x, y});
     }
   }
+  return p;
+}
 
-  // The ideal twin first: the main run compares with it sample by sample.
-  const Model twin_model = ideal_model(model);
-  std::unique_ptr<Keeper> twin;
-  RunResult twin_result;
-  if (o.ideal_twin && !o.from && model.clearance_joint_count() > 0) {
-    Workspace tws(twin_model);
-    twin = std::make_unique<Keeper>(twin_model);
-    RunOptions ro;
-    ro.interrupt = o.interrupt;
-    twin_result = simulate(twin_model, tws, *twin, {}, {}, ro);
-    if (!twin_result.status.ok) twin.reset();
-  }
+/// The ideal twin, run to completion (null when not asked for, not possible or failed).
+std::unique_ptr<Keeper> run_twin(const Model& model, const Model& twin_model,
+                                 const AnalysisOptions& o, RunResult& result) {
+  if (!o.ideal_twin || o.from || model.clearance_joint_count() == 0) return nullptr;
+  Workspace tws(twin_model);
+  auto twin = std::make_unique<Keeper>(twin_model);
+  RunOptions ro;
+  ro.interrupt = o.interrupt;
+  result = simulate(twin_model, tws, *twin, {}, {}, ro);
+  if (!result.status.ok) twin.reset();
+  return twin;
+}
 
-  // The main run.
-  Collector col(model, ws, o, n_out, extra);
-  col.t_discard = t_discard;
-  col.angle_driver = drv;
-  col.angle0 = o.stats_angle0;
-  col.angle1 = o.stats_angle1;
+/// Wires the twin and the spectra's channels into `sa`; a spectrum whose channel is not among
+/// the rows is left out with a note in `skipped`.
+void connect(SampleAnalysis& sa, const Plan& p, const Keeper* twin,
+             std::vector<std::string>* skipped) {
+  sa.t_discard = p.t_discard;
   if (twin) {
-    col.twin = twin.get();
-    for (const auto& c : col.channels) {
+    sa.twin = twin;
+    for (const auto& c : sa.channels) {
       int ti = -1;
       for (size_t i = 0; i < twin->channels.size(); ++i)
         if (twin->channels[i].name == c.name) ti = static_cast<int>(i);
-      col.twin_index.push_back(ti);
+      sa.twin_index.push_back(ti);
     }
-    col.dev_sq.assign(col.channels.size(), 0.0);
-    col.dev_max.assign(col.channels.size(), 0.0);
-    col.dev_n.assign(col.channels.size(), 0);
+    sa.dev_sq.assign(sa.channels.size(), 0.0);
+    sa.dev_max.assign(sa.channels.size(), 0.0);
+    sa.dev_n.assign(sa.channels.size(), 0);
   }
-  col.fft_index = fft_index;
-  col.fft_data.resize(fft_index.size());
+  for (const auto& f : p.fft) {
+    const int i = sa.index(f);
+    if (i >= 0) {
+      sa.fft_index.push_back(i);
+    } else if (skipped) {
+      skipped->push_back("spectrum of " + f + ": the channel was not written (lash run --channels)");
+    }
+  }
+  sa.fft_data.resize(sa.fft_index.size());
+}
 
+/// The analyses of the gathered rows: series, twin comparison, frames, statistics, contact
+/// modes, sections, spectra, the Lyapunov exponent (from `lyapunov_start` at `lyapunov_t0`, when
+/// given) and the verdict.
+RunAnalysis analyze_samples(const Model& model, const AnalysisOptions& o, Plan& p,
+                            SampleAnalysis& sa, std::unique_ptr<Keeper> twin,
+                            const RunResult& twin_result, RunResult main,
+                            const Eigen::VectorXd* lyapunov_start, double lyapunov_t0) {
+  const SolverSettings& s = model.solver;
+  const int nc = static_cast<int>(p.clearance_joints.size());
   RunAnalysis out;
-  RunOptions run_options;
-  run_options.interrupt = o.interrupt;
-  run_options.from = o.from;
-  out.result = simulate(model, ws, col, SectionSchedule{planes.empty() ? period : 0.0, 0.0}, planes,
-                        run_options);
-  col.dec.flush();
-  out.period_driver = drv ? drv->name : std::string();
-  out.period = period;
-  out.period_source = period_source;
-  out.phase = std::move(phase);
+  out.result = std::move(main);
+  sa.dec.flush();
+  out.period_driver = p.drv ? p.drv->name : std::string();
+  out.period = p.period;
+  out.period_source = p.period_source;
+  out.phase = std::move(p.phase);
 
   // Series (decimated), with the crank angle, and the ideal twin on the same time base.
-  out.series.time = std::move(col.dec.time);
-  out.series.channels = channels;
-  out.series.values = std::move(col.dec.data);
-  if (drv && !col.angle_deg.empty()) {
+  out.series.time = std::move(sa.dec.time);
+  out.series.channels = sa.channels;
+  out.series.values = std::move(sa.dec.data);
+  if (p.drv && !sa.angle.empty()) {
     // The series' times are output times (first and last of each bucket): the angle there.
     const double dt = s.output_interval;
     for (double t : out.series.time) {
-      const size_t k = std::min(col.angle_deg.size() - 1,
-                                static_cast<size_t>(std::max(0.0, std::round(t / dt))));
-      out.crank_angle_deg.push_back(col.angle_deg[k]);
+      const size_t k = std::min(sa.angle.size() - 1,
+                                static_cast<size_t>(std::max(0.0, std::round((t - p.t_start) / dt))));
+      out.crank_angle_deg.push_back(sa.angle[k]);
     }
   }
   if (twin) {
     IdealTwin it;
     it.result = twin_result;
-    Decimator td(twin->channels.size(), bucket);
+    Decimator td(twin->channels.size(), p.bucket);
     std::vector<double> row(twin->channels.size());
     const size_t n = twin->data.empty() ? 0 : twin->data[0].size();
     for (size_t k = 0; k < n; ++k) {
@@ -565,19 +768,18 @@ RunAnalysis analyze_run(const Model& model, const AnalysisOptions& o, Observer* 
   }
 
   // Animation frames.
-  out.frames.time = std::move(col.frame_t);
-  for (int b = 0; b < ws.nb; ++b) out.frames.bodies.push_back(model.bodies[b].name);
-  out.frames.pose = std::move(col.poses);
-  for (int c = 0; c < ws.nc; ++c)
-    out.frames.clearance_joints.push_back(model.joints[ws.clearance_joints[c]].name);
-  out.frames.eccentricity = std::move(col.eccentricity);
+  out.frames.time = std::move(sa.frame_t);
+  for (const auto& b : model.bodies) out.frames.bodies.push_back(b.name);
+  out.frames.pose = std::move(sa.poses);
+  for (int j : p.clearance_joints) out.frames.clearance_joints.push_back(model.joints[j].name);
+  out.frames.eccentricity = std::move(sa.eccentricity);
 
   // Statistics and the comparison with the ideal twin.
-  for (size_t i = 0; i < channels.size(); ++i) {
-    const ChannelStats& c = col.stats[i];
+  for (size_t i = 0; i < sa.channels.size(); ++i) {
+    const ChannelStats& c = sa.stats[i];
     if (c.n == 0) continue;
     ChannelStatistics st;
-    st.channel = channels[i].name;
+    st.channel = sa.channels[i].name;
     st.samples = c.n;
     st.min = c.min;
     st.max = c.max;
@@ -589,14 +791,14 @@ RunAnalysis analyze_run(const Model& model, const AnalysisOptions& o, Observer* 
     st.angle0_deg = o.stats_angle0;
     st.angle1_deg = o.stats_angle1;
     out.statistics.push_back(st);
-    if (twin && col.twin_index[i] >= 0 && col.dev_n[i] > 0) {
-      const auto& tv = twin->data[col.twin_index[i]];
+    if (twin && sa.twin_index[i] >= 0 && sa.dev_n[i] > 0) {
+      const auto& tv = twin->data[sa.twin_index[i]];
       double ideal_peak = 0;
       for (double v : tv) ideal_peak = std::max(ideal_peak, std::abs(v));
       ChannelComparison cmp;
-      cmp.channel = channels[i].name;
-      cmp.rms_deviation = std::sqrt(col.dev_sq[i] / col.dev_n[i]);
-      cmp.max_deviation = col.dev_max[i];
+      cmp.channel = sa.channels[i].name;
+      cmp.rms_deviation = std::sqrt(sa.dev_sq[i] / sa.dev_n[i]);
+      cmp.max_deviation = sa.dev_max[i];
       cmp.ideal_peak = ideal_peak;
       cmp.peak_ratio = ideal_peak > 0 ? c.peak() / ideal_peak : 0.0;
       out.ideal_twin->comparison.push_back(cmp);
@@ -606,17 +808,18 @@ RunAnalysis analyze_run(const Model& model, const AnalysisOptions& o, Observer* 
   // Clearance joints: orbit, modes, impact velocities.
   const double t_end = out.result.status.ok ? s.end_time : out.result.status.t;
   const double cont_time = o.continuous_contact_time > 0 ? o.continuous_contact_time
-                           : period > 0               ? 0.1 * period
+                           : p.period > 0             ? 0.1 * p.period
                                                       : 1e-3;
-  for (int c = 0; c < ws.nc; ++c) {
-    const Joint& jt = model.joints[ws.clearance_joints[c]];
-    const JointEvents& je = col.events[c];
+  for (int c = 0; c < nc; ++c) {
+    const Joint& jt = model.joints[p.clearance_joints[c]];
+    const JointEvents& je = sa.events[c];
     ClearanceJointAnalysis ja;
     ja.joint = jt.name;
     ja.clearance = jt.clearance->clearance;
-    ja.orbit = std::move(col.orbit[c]);
+    ja.orbit = std::move(sa.orbit[c]);
     ja.continuous_contact_time = cont_time;
-    ja.modes = contact_modes(je.t, je.onset, je.v, je.in_contact_at_start, t_start, t_end, cont_time);
+    ja.modes = contact_modes(je.t, je.onset, je.v, je.in_contact_at_start, p.t_start, t_end,
+                             cont_time);
     // Histogram of impact velocities: 12 bins from 0 to the largest.
     double vmax = 0;
     for (double v : ja.modes.impact_velocities) vmax = std::max(vmax, v);
@@ -630,80 +833,81 @@ RunAnalysis analyze_run(const Model& model, const AnalysisOptions& o, Observer* 
 
   // Poincaré sections: distinct points within 1% of the smallest clearance (1 µm without one).
   double tol = 1e-6;
-  for (int c = 0; c < ws.nc; ++c)
-    tol = c == 0 ? 0.01 * model.joints[ws.clearance_joints[c]].clearance->clearance
-                 : std::min(tol, 0.01 * model.joints[ws.clearance_joints[c]].clearance->clearance);
-  const int distinct = count_distinct(col.sections, tol);
-  const int n_sections = static_cast<int>(col.sections.size());
+  for (int c = 0; c < nc; ++c) {
+    const double own = 0.01 * model.joints[p.clearance_joints[c]].clearance->clearance;
+    tol = c == 0 ? own : std::min(tol, own);
+  }
+  const int distinct = count_distinct(sa.sections, tol);
+  const int n_sections = static_cast<int>(sa.sections.size());
   // The period the exponent is weighed against, and the run that would give enough sections:
   // stroboscopic sections fall at k·T for k >= the discarded periods; event-based ones at the
   // rate seen so far.
-  double verdict_period = period, min_end_time = 0.0;
-  if (period > 0 && planes.empty()) {
-    min_end_time = t_start + (kVerdictMinSections - 1 + o.discard_periods) * period;
+  double verdict_period = p.period, min_end_time = 0.0;
+  if (p.period > 0 && p.planes.empty()) {
+    min_end_time = p.t_start + (kVerdictMinSections - 1 + o.discard_periods) * p.period;
   } else if (n_sections >= 2) {
-    verdict_period = (col.section_t.back() - col.section_t.front()) / (n_sections - 1);
-    min_end_time = t_discard + (kVerdictMinSections + 1) * verdict_period;
+    verdict_period = (sa.section_t.back() - sa.section_t.front()) / (n_sections - 1);
+    min_end_time = p.t_discard + (kVerdictMinSections + 1) * verdict_period;
   }
-  if (period > 0 || !planes.empty()) {
-    PoincareSections p;
-    p.kind = planes.empty() ? "stroboscopic" : "event";
-    p.planes = o.section_planes;
-    p.period = period;
-    p.discarded_periods = o.discard_periods;
-    if (ws.nc > 0) {
-      const std::string& n = model.joints[ws.clearance_joints[0]].name;
-      p.variables = {n + ".ex", n + ".ey"};
+  if (p.period > 0 || !p.planes.empty()) {
+    PoincareSections ps;
+    ps.kind = p.planes.empty() ? "stroboscopic" : "event";
+    ps.planes = o.section_planes;
+    ps.period = p.period;
+    ps.discarded_periods = o.discard_periods;
+    if (nc > 0) {
+      const std::string& n = model.joints[p.clearance_joints[0]].name;
+      ps.variables = {n + ".ex", n + ".ey"};
     } else {
-      p.variables = {model.bodies[0].name + ".x", model.bodies[0].name + ".y"};
+      ps.variables = {model.bodies[0].name + ".x", model.bodies[0].name + ".y"};
     }
-    for (int c = 0; c < ws.nc; ++c) {
+    for (int c = 0; c < nc; ++c) {
       JointSections js;
-      js.joint = model.joints[ws.clearance_joints[c]].name;
+      js.joint = model.joints[p.clearance_joints[c]].name;
       js.variables = {js.joint + ".ex", js.joint + ".ey"};
-      js.tolerance = 0.01 * model.joints[ws.clearance_joints[c]].clearance->clearance;
+      js.tolerance = 0.01 * model.joints[p.clearance_joints[c]].clearance->clearance;
       std::vector<std::vector<double>> own;
-      for (const auto& x : col.sections) {
+      for (const auto& x : sa.sections) {
         js.points.push_back({x[2 * c], x[2 * c + 1]});
         own.push_back({x[2 * c], x[2 * c + 1]});
       }
       js.distinct = count_distinct(own, js.tolerance);
-      p.joints.push_back(std::move(js));
+      ps.joints.push_back(std::move(js));
     }
-    p.points = std::move(col.sections);
-    p.times = std::move(col.section_t);
-    p.distinct = distinct;
-    p.tolerance = tol;
-    out.poincare = std::move(p);
+    ps.points = std::move(sa.sections);
+    ps.times = std::move(sa.section_t);
+    ps.distinct = distinct;
+    ps.tolerance = tol;
+    out.poincare = std::move(ps);
   }
 
   // Spectra of the kept channels after the transient.
   int off_harmonic = -1;
-  for (size_t i = 0; i < col.fft_index.size(); ++i) {
-    if (col.fft_data[i].size() < 16) continue;
-    const Spectrum spec = amplitude_spectrum(col.fft_data[i], s.output_interval);
-    if (i == 0 && period > 0) off_harmonic = non_harmonic_peaks(spec, 1.0 / period);
+  for (size_t i = 0; i < sa.fft_index.size(); ++i) {
+    if (sa.fft_data[i].size() < 16) continue;
+    const Spectrum spec = amplitude_spectrum(sa.fft_data[i], s.output_interval);
+    if (i == 0 && p.period > 0) off_harmonic = non_harmonic_peaks(spec, 1.0 / p.period);
     ChannelSpectrum cs;
-    cs.channel = channels[col.fft_index[i]].name;
+    cs.channel = sa.channels[sa.fft_index[i]].name;
     decimate_min_max(spec.frequency, spec.amplitude, o.spectrum_points, cs.frequency, cs.amplitude);
     cs.window = spec.window;
-    cs.discarded_time = t_discard;
+    cs.discarded_time = p.t_discard;
     out.spectra.push_back(std::move(cs));
   }
 
   // Largest Lyapunov exponent, renormalised 20 times per period, over the run after the
   // transient (at least one period of it).
   double lyap = std::nan("");
-  if (o.lyapunov && ws.nq - ws.m == 0) {
+  if (o.lyapunov && p.free_coordinates == 0) {
     LyapunovEstimate e;
     e.message = "no free degree of freedom: the drivers fix every coordinate";
     out.lyapunov = e;
-  } else if (o.lyapunov && out.result.status.ok && col.have_lyapunov_start && period > 0) {
-    const double interval = period / 20.0;
-    const int intervals = static_cast<int>((s.end_time - col.lyapunov_t0) / interval);
+  } else if (o.lyapunov && out.result.status.ok && lyapunov_start && p.period > 0) {
+    const double interval = p.period / 20.0;
+    const int intervals = static_cast<int>((s.end_time - lyapunov_t0) / interval);
     if (intervals >= 20) {
-      out.lyapunov = lyapunov_from(model, col.lyapunov_start, col.lyapunov_t0, interval,
-                                   intervals, o.lyapunov_d0, o.interrupt);
+      out.lyapunov = lyapunov_from(model, *lyapunov_start, lyapunov_t0, interval, intervals,
+                                   o.lyapunov_d0, o.interrupt);
       lyap = out.lyapunov->exponent;
     }
   }
@@ -714,10 +918,219 @@ RunAnalysis analyze_run(const Model& model, const AnalysisOptions& o, Observer* 
   out.verdict.evidence = v.evidence;
   out.verdict.rule = verdict_rule();
   out.verdict.lyapunov_exponent = lyap;
-  out.verdict.period = period;
+  out.verdict.period = p.period;
   out.verdict.distinct_points = distinct;
   out.verdict.sections = n_sections;
   out.verdict.off_harmonic_peaks = off_harmonic;
+  return out;
+}
+
+/// The period driver's angle at the times of a recorded run's rows, from its prescribed
+/// motion; a speed expression's angle (an auxiliary state of the run, not written) is its
+/// speed integrated by composite Simpson's rule (16 panels per output interval) from t = 0.
+class RecordedAngle {
+ public:
+  RecordedAngle(const Model& m, const Driver* d)
+      : model_(m), d_(d), ws_(m), y_(Eigen::VectorXd::Zero(ws_.ny)) {}
+  double at(double t) {
+    if (!d_) return std::nan("");
+    const int di = static_cast<int>(d_ - model_.drivers.data());
+    if (d_->profile == DriverProfile::speed) {
+      constexpr int kPanels = 16;
+      const double h = (t - t_) / kPanels;
+      double sum = 0.0;
+      for (int i = 0; i <= kPanels; ++i) {
+        double f, fd, fdd;
+        driver_motion(model_, ws_, di, t_ + i * h, y_.data(), f, fd, fdd);
+        sum += (i == 0 || i == kPanels ? 1.0 : i % 2 ? 4.0 : 2.0) * fd;
+      }
+      y_[ws_.aux_driver[di]] += sum * h / 3.0;
+      t_ = t;
+    }
+    return driver_angle_deg(model_, ws_, *d_, t, y_.data());
+  }
+
+ private:
+  const Model& model_;
+  const Driver* d_;
+  Workspace ws_;
+  Eigen::VectorXd y_;
+  double t_ = 0.0;
+};
+
+}  // namespace
+
+RunAnalysis analyze_run(const Model& model, const AnalysisOptions& o, Observer* extra) {
+  Plan p = plan_analysis(model, o);
+
+  // The ideal twin first: the main run compares with it sample by sample.
+  const Model twin_model = ideal_model(model);
+  RunResult twin_result;
+  std::unique_ptr<Keeper> twin = run_twin(model, twin_model, o, twin_result);
+
+  // The main run, observed.
+  Workspace ws(model);
+  SampleAnalysis sa(model, p.channels, o, p.n_out, p.clearance_joints);
+  connect(sa, p, twin.get(), nullptr);
+  sa.angle0 = o.stats_angle0;
+  sa.angle1 = o.stats_angle1;
+  Collector col(model, ws, sa, extra);
+  col.angle_driver = p.drv;
+  RunOptions run_options;
+  run_options.interrupt = o.interrupt;
+  run_options.from = o.from;
+  RunResult main = simulate(model, ws, col, SectionSchedule{p.planes.empty() ? p.period : 0.0, 0.0},
+                            p.planes, run_options);
+  RunAnalysis out = analyze_samples(model, o, p, sa, std::move(twin), twin_result, std::move(main),
+                                    col.have_lyapunov_start ? &col.lyapunov_start : nullptr,
+                                    col.lyapunov_t0);
+  out.provenance.read.push_back("the main run's outputs, events and sections, observed while it ran");
+  if (out.ideal_twin) out.provenance.resimulated.push_back("ideal twin: run beside the main run");
+  if (out.lyapunov && out.lyapunov->estimated)
+    out.provenance.resimulated.push_back("Lyapunov exponent: two trajectories from the run's "
+                                         "state at the first section after the transient");
+  return out;
+}
+
+RunAnalysis analyze_recorded_run(const Model& model, const AnalysisOptions& o, RecordedRun& run) {
+  if (o.from)
+    throw std::invalid_argument("a recorded run is analysed from its own start (no --from)");
+  Plan p = plan_analysis(model, o);
+  const SolverSettings& s = model.solver;
+  Provenance prov;
+  prov.read = run.read;
+
+  // The columns the run wrote, as the model declares them.
+  std::vector<ChannelInfo> cols;
+  for (const auto& name : run.columns) {
+    const auto it = std::find_if(p.channels.begin(), p.channels.end(),
+                                 [&](const ChannelInfo& c) { return c.name == name; });
+    if (it == p.channels.end())
+      throw std::invalid_argument(run.series_file + ": column '" + name +
+                                  "' is not a channel of the run's model");
+    cols.push_back(*it);
+  }
+
+  const Model twin_model = ideal_model(model);
+  RunResult twin_result;
+  std::unique_ptr<Keeper> twin = run_twin(model, twin_model, o, twin_result);
+  if (twin) prov.resimulated.push_back("ideal twin: not saved by a run, simulated now");
+
+  SampleAnalysis sa(model, cols, o, p.n_out, p.clearance_joints);
+  connect(sa, p, twin.get(), &prov.skipped);
+  sa.angle0 = o.stats_angle0;
+  sa.angle1 = o.stats_angle1;
+  if (!sa.missing_pose.empty())
+    prov.skipped.push_back("animation frames: the pose (x, y, phi) of " + sa.missing_pose.front() +
+                           (sa.missing_pose.size() > 1 ? " and others" : "") + " not written");
+  if (!sa.missing_ecc.empty())
+    prov.skipped.push_back("journal orbits" +
+                           std::string(sa.missing_pose.empty() ? " and animation frames" : "") +
+                           ": " + sa.missing_ecc.front() + ".ex/ey not written (lash run --channels)");
+  std::vector<PhasePortrait> kept;
+  for (const auto& ph : p.phase) {
+    if (sa.index(ph.x) >= 0 && sa.index(ph.y) >= 0)
+      kept.push_back(ph);
+    else
+      prov.skipped.push_back("phase portrait " + ph.x + " / " + ph.y + ": not written");
+  }
+  p.phase = std::move(kept);
+
+  // Contact modes at the start: a joint whose first event is a separation began in contact.
+  for (const RecordedEvent& e : run.events) {
+    if (e.joint < 0 || e.joint >= static_cast<int>(sa.events.size())) continue;
+    if (sa.events[e.joint].t.empty()) sa.events[e.joint].in_contact_at_start = !e.onset;
+    sa.event(e.joint, e.t, e.onset, e.velocity);
+  }
+
+  // The rows: every analysis of the main run, and the stroboscopic sections between them.
+  const SectionPoint row_point(model, p.clearance_joints, cols);
+  bool rows_sections = p.planes.empty() && p.period > 0 && row_point.complete();
+  SectionInterpolator strobe(sa, row_point, p.period, cols.size());
+  RecordedAngle angle(model, p.drv);
+  bool angle_ok = true;
+  std::vector<double> v(cols.size());
+  double t = 0.0;
+  bool first = true;
+  while (run.next_row(t, v.data())) {
+    if (first && t != 0.0 && p.drv && p.drv->profile == DriverProfile::speed) angle_ok = false;
+    first = false;
+    sa.output(t, v.data(), angle_ok ? angle.at(t) : std::nan(""));
+    if (rows_sections) strobe.row(t, v.data());
+    if (o.interrupt && o.interrupt->load() != 0) break;
+  }
+  // Interpolated sections are kept when their estimated error is below a tenth of the
+  // tolerance within which points count as one (1% of the smallest clearance, 1 µm without one).
+  std::string strobe_note;
+  if (rows_sections) {
+    strobe.finish();
+    double tol = 1e-6;
+    for (size_t c = 0; c < p.clearance_joints.size(); ++c) {
+      const double own = 0.01 * model.joints[p.clearance_joints[c]].clearance->clearance;
+      tol = c == 0 ? own : std::min(tol, own);
+    }
+    const std::string estimate = "estimated interpolation error " + fmt_g(strobe.largest_estimate()) +
+                                 " m, " + (strobe.largest_estimate() <= 0.1 * tol ? "within" : "above") +
+                                 " a tenth of the " + fmt_g(tol) + " m point tolerance";
+    if (strobe.largest_estimate() <= 0.1 * tol) {
+      const long n = strobe.sections(), exact = strobe.on_outputs();
+      prov.read.push_back(exact == n ? "stroboscopic sections: from the outputs (every section "
+                                       "time k·T is an output time)"
+                                     : "stroboscopic sections: interpolated between outputs "
+                                       "(cubic through 4 outputs; " + estimate + "), " +
+                                           std::to_string(n - exact) + " of " +
+                                           std::to_string(n) + " sections");
+    } else {
+      rows_sections = false;
+      sa.sections.clear();
+      sa.section_t.clear();
+      strobe_note = " (interpolated between outputs: " + estimate + ")";
+    }
+  }
+  if (!angle_ok) {
+    sa.angle.clear();
+    prov.skipped.push_back("crank angle: the run did not start at t = 0 and its driver follows a "
+                           "speed expression");
+  }
+
+  // What the files do not hold: sections on a plane (or of channels not written), and the state
+  // where the Lyapunov trajectories start. The main run is made again as far as needed.
+  const bool need_sections = (p.period > 0 || !p.planes.empty()) && !rows_sections;
+  const bool want_lyapunov = o.lyapunov && p.free_coordinates > 0 && run.result.status.ok &&
+                             p.period > 0 &&
+                             (!rows_sections || (!sa.section_t.empty() &&
+                                                 (s.end_time - sa.section_t.front()) / (p.period / 20.0) >= 20));
+  Eigen::VectorXd start;
+  double start_t = 0.0;
+  bool have_start = false;
+  if (need_sections || want_lyapunov) {
+    Workspace ws(model);
+    Collector col(model, ws, sa, nullptr);
+    col.feed_outputs = false;
+    col.feed_sections = need_sections;
+    col.stop_at_lyapunov_start = !need_sections;
+    RunOptions ro;
+    ro.interrupt = o.interrupt;
+    const RunResult again = simulate(model, ws, col,
+                                     SectionSchedule{p.planes.empty() ? p.period : 0.0, 0.0},
+                                     p.planes, ro);
+    if (need_sections)
+      prov.resimulated.push_back(
+          std::string(!p.planes.empty()         ? "event sections on the plane"
+                      : !row_point.complete() ? "stroboscopic sections (their channels were not written)"
+                                              : "stroboscopic sections" + strobe_note) +
+          ": the main run made again to t = " + fmt_g(again.status.t) + " s");
+    else
+      prov.resimulated.push_back("Lyapunov start state (not written): the main run made again to "
+                                 "its first section after the transient, t = " +
+                                 fmt_g(col.lyapunov_t0) + " s");
+    if (col.have_lyapunov_start) start = col.lyapunov_start, start_t = col.lyapunov_t0, have_start = true;
+  }
+  RunAnalysis out = analyze_samples(model, o, p, sa, std::move(twin), twin_result, run.result,
+                                    have_start ? &start : nullptr, start_t);
+  if (out.lyapunov && out.lyapunov->estimated)
+    prov.resimulated.push_back("Lyapunov exponent: two trajectories, simulated now");
+  out.provenance = std::move(prov);
   return out;
 }
 

@@ -9,6 +9,7 @@
 #include <array>
 #include <atomic>
 #include <cmath>
+#include <functional>
 #include <optional>
 #include <string>
 #include <utility>
@@ -191,8 +192,17 @@ struct MotionVerdict {
   int off_harmonic_peaks = -1;              ///< strong spectral peaks off the harmonics; −1: not computed
 };
 
+/// Where each part of a RunAnalysis came from, as sentences (printed by `lash report` and
+/// `lash analyze`, and kept in report_data.json as `provenance`).
+struct Provenance {
+  std::vector<std::string> read;         ///< taken from what the run wrote (or observed it while it ran)
+  std::vector<std::string> resimulated;  ///< computed by simulating now
+  std::vector<std::string> skipped;      ///< left out, with the reason (a channel not written)
+};
+
 /// Everything a run with its analyses produced.
 struct RunAnalysis {
+  Provenance provenance;
   RunResult result;                    ///< the main run
   std::string period_driver;           ///< the driver whose period is used ("" none)
   double period = 0.0;                 ///< s, 2π/|ω| of that driver, 0 without one
@@ -234,5 +244,36 @@ Model ideal_model(const Model& model);
 /// state exists.
 RunAnalysis analyze_run(const Model& model, const AnalysisOptions& options,
                         Observer* extra = nullptr);
+
+/// One located contact event of a recorded run (events.csv).
+struct RecordedEvent {
+  int joint = 0;          ///< index among the model's clearance joints
+  double t = 0.0;         ///< s
+  bool onset = true;      ///< onset (true) or separation
+  double velocity = 0.0;  ///< δ̇ at the event, m/s
+};
+
+/// A finished run as its folder holds it (io/run_folder.hpp reads one): the status from its
+/// summary, the time series row by row, its events.
+struct RecordedRun {
+  RunResult result;                  ///< status and integrator statistics (summary.json)
+  std::string series_file;           ///< the time series' path, for messages
+  std::vector<std::string> columns;  ///< channels of each row (a subset after `lash run --channels`)
+  /// Reads the next row: its time and one value per column; false after the last. Throws
+  /// (naming the file and line) on a damaged row.
+  std::function<bool(double& t, double* values)> next_row;
+  std::vector<RecordedEvent> events;  ///< in time order
+  std::vector<std::string> read;      ///< what was read, as sentences (Provenance::read)
+};
+
+/// The analyses of analyze_run() from what a run wrote instead of running it again: the same
+/// code (one observer or one reader hands rows of channel values to the same analyses). Made
+/// again, and said so in `provenance`: the ideal twin, the Lyapunov trajectories with the main
+/// run up to their start, and sections the rows cannot give (a plane, or channels not written);
+/// stroboscopic sections are interpolated between the rows. Analyses of channels not written
+/// are left out with a note. Throws std::invalid_argument for options as analyze_run() does and
+/// whatever `run.next_row` throws.
+RunAnalysis analyze_recorded_run(const Model& model, const AnalysisOptions& options,
+                                 RecordedRun& run);
 
 }  // namespace lash

@@ -1,0 +1,271 @@
+#include "io/run_folder.hpp"
+
+#include <algorithm>
+#include <cerrno>
+#include <charconv>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <memory>
+#include <nlohmann/json.hpp>
+
+#include "io/files.hpp"
+#include "io/state_file.hpp"
+
+namespace lash {
+
+namespace {
+
+using nlohmann::json;
+
+std::string fmt_g(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", v);
+  return buf;
+}
+
+[[noreturn]] void damaged(const std::string& what) { throw RunFolderError(what); }
+
+/// A number of a CSV field, the whole field; NaN and ±inf are numbers (a failed run writes them).
+bool parse_number(const char* b, const char* e, double& v) {
+  if (b == e) return false;
+  if (*b == '+') return false;  // the writer never writes one
+  const auto r = std::from_chars(b, e, v);
+  return r.ec == std::errc() && r.ptr == e;
+}
+
+/// Splits a line at commas.
+std::vector<std::string> split(const std::string& line) {
+  std::vector<std::string> out;
+  size_t a = 0;
+  for (size_t i = 0; i <= line.size(); ++i)
+    if (i == line.size() || line[i] == ',') out.push_back(line.substr(a, i - a)), a = i + 1;
+  return out;
+}
+
+/// Lines of a file (counting '\n') and whether its last byte ends a line; throws IoError.
+std::pair<long long, bool> count_lines(const std::string& path) {
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) throw IoError(path, std::string("cannot be opened: ") + std::strerror(errno));
+  std::vector<char> buf(1 << 20);
+  long long lines = 0;
+  char last = '\n';
+  size_t n;
+  while ((n = std::fread(buf.data(), 1, buf.size(), f)) > 0) {
+    for (size_t i = 0; i < n; ++i) lines += buf[i] == '\n';
+    last = buf[n - 1];
+  }
+  const bool err = std::ferror(f);
+  std::fclose(f);
+  if (err) throw IoError(path, "read failed");
+  return {lines, last == '\n'};
+}
+
+/// A member of the summary, or the message that it is missing.
+const json& member(const json& j, const std::string& path, const std::string& key) {
+  if (!j.is_object() || !j.contains(key)) damaged(path + ": damaged (no '" + key + "'); run the model again");
+  return j[key];
+}
+
+RunOutcome outcome_of(const std::string& s) {
+  if (s == "completed") return RunOutcome::completed;
+  if (s == "interrupted") return RunOutcome::interrupted;
+  if (s == "write_error") return RunOutcome::write_error;
+  return RunOutcome::failed;
+}
+
+/// The rows of timeseries.csv, read one at a time and checked as they come.
+struct CsvRows {
+  std::ifstream in;
+  std::string path;
+  size_t width = 0;  ///< values per row, time included
+  long long line = 1;
+  double t_last = -std::numeric_limits<double>::infinity();
+  bool next(double& t, double* values) {
+    std::string s;
+    if (!std::getline(in, s)) {
+      if (in.bad()) throw IoError(path, "read failed");
+      return false;
+    }
+    ++line;
+    const std::string where = path + ":" + std::to_string(line);
+    size_t col = 0, a = 0;
+    for (size_t i = 0; i <= s.size(); ++i) {
+      if (i < s.size() && s[i] != ',') continue;
+      if (col >= width)
+        damaged(where + ": more than " + std::to_string(width) +
+                " fields (time and one per channel of the header)");
+      double v;
+      if (!parse_number(s.data() + a, s.data() + i, v))
+        damaged(where + ":" + std::to_string(a + 1) + ": '" + s.substr(a, i - a) +
+                "' is not a number");
+      if (col == 0) t = v;
+      else values[col - 1] = v;
+      ++col;
+      a = i + 1;
+    }
+    if (col != width)
+      damaged(where + ": " + std::to_string(col) + " fields, expected " + std::to_string(width) +
+              " (time and one per channel of the header): the row is cut");
+    if (!(t > t_last)) damaged(where + ": time " + s.substr(0, s.find(',')) + " does not follow the row before");
+    t_last = t;
+    return true;
+  }
+};
+
+}  // namespace
+
+RecordedRun read_run_folder(const std::string& dir, const Model& model) {
+  namespace fs = std::filesystem;
+  const std::string summary_path = dir + "/summary.json", model_path = dir + "/model_resolved.yaml";
+  RecordedRun run;
+
+  // summary.json: the run's own account, written last; without it the run did not finish.
+  if (!fs::exists(summary_path))
+    damaged(summary_path + ": missing: the run did not finish (killed?), so its files are not "
+                           "known to be whole; run the model again");
+  json sum;
+  try {
+    sum = json::parse(read_input_file(summary_path, kMaxModelFileBytes));
+  } catch (const json::exception& e) {
+    damaged(summary_path + ": damaged (not valid JSON: " + e.what() + "); run the model again");
+  } catch (const std::invalid_argument& e) {
+    damaged(e.what());
+  }
+  // The model it ran: exactly the text of model_resolved.yaml (an edited model would give a
+  // report of a run that never happened).
+  const json& resolved = member(member(sum, summary_path, "model"), summary_path, "resolved");
+  if (!resolved.is_string()) damaged(summary_path + ": damaged (model.resolved is not text)");
+  if (resolved.get<std::string>() + "\n" != read_input_file(model_path, kMaxModelFileBytes))
+    damaged(model_path + ": differs from the model this run used (summary.json model.resolved): "
+                         "edited after the run? It no longer matches the run's results; run the "
+                         "edited model with `lash run` instead");
+  try {
+    const json& st = member(sum, summary_path, "status");
+    RunStatus& s = run.result.status;
+    s.outcome = outcome_of(st.at("outcome").get<std::string>());
+    s.ok = st.at("ok").get<bool>();
+    s.t = st.at("time").get<double>();
+    s.element = st.at("element").get<std::string>();
+    s.message = st.at("message").get<std::string>();
+    const json& in = member(sum, summary_path, "integrator");
+    run.result.integrator = in.at("name").get<std::string>();
+    run.result.stats.steps = in.at("steps").get<long>();
+    run.result.stats.rejected_steps = in.at("rejected_steps").get<long>();
+    run.result.stats.rhs_evaluations = in.at("rhs_evaluations").get<long>();
+    run.result.stats.events = in.at("events").get<long>();
+    run.result.wall_seconds = in.at("wall_seconds").get<double>();
+    run.result.outputs = in.at("outputs").get<long>();
+    run.result.missed_events = in.at("missed_events").get<long>();
+    run.result.max_constraint_violation = sum.at("max_constraint_violation").get<double>();
+    if (sum.contains("warnings"))
+      run.result.warnings = sum["warnings"].get<std::vector<std::string>>();
+  } catch (const json::exception& e) {
+    damaged(summary_path + ": damaged (" + e.what() + "); run the model again");
+  }
+  const RunStatus& status = run.result.status;
+  if (status.outcome == RunOutcome::interrupted || status.outcome == RunOutcome::write_error)
+    damaged(summary_path + ": the run did not complete (status.outcome " +
+            outcome_name(status.outcome) + " at t = " + fmt_g(status.t) +
+            " s), so its results cover part of the run only; continue it with `lash run "
+            "--from` or run the model again");
+  const json& output = member(sum, summary_path, "output");
+  long long rows = 0;
+  std::string file;
+  try {
+    rows = output.at("rows").get<long long>();
+    file = output.at("file").get<std::string>();
+    run.columns = output.at("channels").get<std::vector<std::string>>();
+  } catch (const json::exception& e) {
+    damaged(summary_path + ": damaged (" + e.what() + "); run the model again");
+  }
+  if (file != "timeseries.csv" && file != "timeseries.h5")
+    damaged(summary_path + ": damaged (output.file is '" + file + "')");
+  run.read.push_back("status and integrator statistics: summary.json (outcome " +
+                     std::string(outcome_name(status.outcome)) + ")");
+
+  // final_state.json: where the run stopped, in the model's layout.
+  const std::string state_path = dir + "/final_state.json";
+  if (!fs::exists(state_path)) damaged(state_path + ": missing (every finished run writes it)");
+  try {
+    run.result.final_state = read_state(state_path, model, Workspace(model));
+  } catch (const IoError&) {
+    throw;
+  } catch (const std::exception& e) {
+    const std::string m = e.what();
+    damaged(m.find(state_path) == std::string::npos ? state_path + ": " + m : m);
+  }
+  run.read.push_back("final state: final_state.json (t = " + fmt_g(run.result.final_state.t) + " s)");
+
+  // events.csv: every row, now (a few thousand at most per second of run).
+  const std::string events_path = dir + "/events.csv";
+  if (!fs::exists(events_path)) damaged(events_path + ": missing");
+  {
+    std::vector<std::string> joints;
+    for (const auto& j : model.joints)
+      if (j.clearance) joints.push_back(j.name);
+    const auto [lines, whole] = count_lines(events_path);
+    if (!whole) damaged(events_path + ":" + std::to_string(lines + 1) + ": the last row is cut (no line end)");
+    std::ifstream in(events_path);
+    std::string line;
+    long long n = 0;
+    if (!std::getline(in, line) || line != "time,joint,event,velocity")
+      damaged(events_path + ":1: expected the header 'time,joint,event,velocity'");
+    while (std::getline(in, line)) {
+      ++n;
+      const std::string where = events_path + ":" + std::to_string(n + 1);
+      const auto f = split(line);
+      if (f.size() != 4) damaged(where + ": " + std::to_string(f.size()) + " fields, expected 4 (time,joint,event,velocity)");
+      RecordedEvent e;
+      if (!parse_number(f[0].data(), f[0].data() + f[0].size(), e.t))
+        damaged(where + ":1: '" + f[0] + "' is not a number");
+      const auto it = std::find(joints.begin(), joints.end(), f[1]);
+      if (it == joints.end()) damaged(where + ": '" + f[1] + "' is not a clearance joint of the model");
+      e.joint = static_cast<int>(it - joints.begin());
+      if (f[2] != "onset" && f[2] != "separation")
+        damaged(where + ": event '" + f[2] + "', expected onset or separation");
+      e.onset = f[2] == "onset";
+      if (!parse_number(f[3].data(), f[3].data() + f[3].size(), e.velocity))
+        damaged(where + ": velocity '" + f[3] + "' is not a number");
+      if (!run.events.empty() && e.t < run.events.back().t)
+        damaged(where + ": time " + f[0] + " is before the row above");
+      run.events.push_back(e);
+    }
+    if (n != run.result.stats.events)
+      damaged(events_path + ": " + std::to_string(n) + " events, summary.json counts " +
+              std::to_string(run.result.stats.events) + ": cut or edited after the run");
+    run.read.push_back("contact events: events.csv (" + std::to_string(n) + ")");
+  }
+
+  // The time series: header and row count now, each row as it is read.
+  run.series_file = dir + "/" + file;
+  if (!fs::exists(run.series_file)) damaged(run.series_file + ": missing (summary.json lists it)");
+  if (file == "timeseries.h5") return run;  // not read yet: no next_row
+  const auto [lines, whole] = count_lines(run.series_file);
+  if (!whole)
+    damaged(run.series_file + ":" + std::to_string(lines + 1) + ": the last row is cut (no line end)");
+  if (lines - 1 != rows)
+    damaged(run.series_file + ": " + std::to_string(std::max(0LL, lines - 1)) +
+            " rows, summary.json says " + std::to_string(rows) + ": cut or edited after the run");
+  auto csv = std::make_shared<CsvRows>();
+  csv->path = run.series_file;
+  csv->in.open(run.series_file);
+  if (!csv->in) throw IoError(run.series_file, "cannot be opened");
+  std::string header;
+  std::getline(csv->in, header);
+  std::string expected = "time";
+  for (const auto& c : run.columns) expected += "," + c;
+  if (header != expected)
+    damaged(run.series_file + ":1: the header differs from the channels summary.json lists "
+                              "(output.channels)");
+  csv->width = run.columns.size() + 1;
+  run.next_row = [csv](double& t, double* v) { return csv->next(t, v); };
+  run.read.push_back("time series: " + file + " (" + std::to_string(rows) + " rows, " +
+                     std::to_string(run.columns.size()) + " channels)");
+  return run;
+}
+
+}  // namespace lash

@@ -1,0 +1,246 @@
+// A run folder read back (io/run_folder.hpp): the analyses from what a run wrote agree with the
+// same analyses made while it ran (the reference), and what the files lack is said.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "io/model_loader.hpp"
+#include "io/results_writer.hpp"
+#include "io/run_folder.hpp"
+#include "study/run_analysis.hpp"
+#include "test_support.hpp"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path temp_dir(const std::string& name) {
+  const fs::path d =
+      fs::temp_directory_path() / ("lash_run_folder_" + name + "_" + std::to_string(getpid()));
+  fs::remove_all(d);
+  return d;
+}
+
+/// Runs the example into `dir` with the analyses made during the run, as `lash run --report`
+/// does (the results writer observes the analysed run), and returns those analyses.
+lash::RunAnalysis run_into(const fs::path& dir, const std::vector<std::string>& overrides,
+                           const lash::AnalysisOptions& o, std::vector<std::string> channels = {}) {
+  const lash::LoadedModel m =
+      lash::load_model_file(lash::test::example_path("flores_slider_crank.yaml"), overrides);
+  lash::OutputSettings out = m.output;
+  if (!channels.empty()) out.channels = channels;
+  lash::ResultsWriter w(m.model, dir.string(), m.resolved_yaml, overrides, "", out);
+  lash::RunAnalysis ra = lash::analyze_run(m.model, o, &w);
+  w.finish(ra.result);
+  return ra;
+}
+
+/// The analyses of the folder, as `lash report DIR` makes them.
+lash::RunAnalysis from_folder(const fs::path& dir, const lash::AnalysisOptions& o) {
+  const lash::LoadedModel m = lash::load_model_file((dir / "model_resolved.yaml").string());
+  lash::RecordedRun run = lash::read_run_folder(dir.string(), m.model);
+  return lash::analyze_recorded_run(m.model, o, run);
+}
+
+/// |a − b| within the 9 significant digits of the CSV (relative 1e-8 of the channel's scale).
+void expect_csv_close(double a, double b, double scale, const std::string& what) {
+  EXPECT_NEAR(a, b, 1e-8 * std::max(std::abs(scale), 1e-300) + 1e-300) << what;
+}
+
+bool mentions(const std::vector<std::string>& lines, const std::string& text) {
+  return std::any_of(lines.begin(), lines.end(),
+                     [&](const std::string& l) { return l.find(text) != std::string::npos; });
+}
+
+}  // namespace
+
+TEST(RunFolder, AnalysesFromTheFilesMatchThoseMadeDuringTheRun) {
+  // 17 crank periods of the Flores example (end_time 0.204 s; T = 12 ms at 5000 rpm): enough
+  // sections for a verdict and an exponent. The reference is the in-run analysis.
+  const fs::path dir = temp_dir("same");
+  lash::AnalysisOptions o;
+  const lash::RunAnalysis in_run = run_into(dir, {"solver.end_time=0.204"}, o);
+  const lash::RunAnalysis files = from_folder(dir, o);
+
+  // Status and statistics: the CSV keeps 9 significant digits.
+  EXPECT_EQ(files.result.status.ok, in_run.result.status.ok);
+  EXPECT_EQ(files.result.outputs, in_run.result.outputs);
+  EXPECT_EQ(files.result.stats.events, in_run.result.stats.events);
+  ASSERT_EQ(files.statistics.size(), in_run.statistics.size());
+  for (size_t i = 0; i < in_run.statistics.size(); ++i) {
+    const auto& a = in_run.statistics[i];
+    const auto& b = files.statistics[i];
+    ASSERT_EQ(a.channel, b.channel);
+    EXPECT_EQ(a.samples, b.samples) << a.channel;
+    expect_csv_close(b.min, a.min, a.peak, a.channel + " min");
+    expect_csv_close(b.max, a.max, a.peak, a.channel + " max");
+    expect_csv_close(b.rms, a.rms, a.peak, a.channel + " rms");
+  }
+  // The decimated series and the frames.
+  ASSERT_EQ(files.series.time.size(), in_run.series.time.size());
+  ASSERT_EQ(files.frames.time.size(), in_run.frames.time.size());
+  ASSERT_EQ(files.crank_angle_deg.size(), in_run.crank_angle_deg.size());
+  for (size_t k = 0; k < in_run.crank_angle_deg.size(); ++k)
+    EXPECT_NEAR(files.crank_angle_deg[k], in_run.crank_angle_deg[k], 1e-9);
+  // Contact modes and impact velocities (events.csv keeps 12 digits of time, 9 of velocity).
+  ASSERT_EQ(files.clearance.size(), in_run.clearance.size());
+  for (size_t c = 0; c < in_run.clearance.size(); ++c) {
+    const auto& a = in_run.clearance[c].modes;
+    const auto& b = files.clearance[c].modes;
+    EXPECT_EQ(a.impacts, b.impacts);
+    EXPECT_NEAR(a.free_flight_share, b.free_flight_share, 1e-9);
+    EXPECT_NEAR(a.continuous_share, b.continuous_share, 1e-9);
+    ASSERT_EQ(a.impact_velocities.size(), b.impact_velocities.size());
+    for (size_t k = 0; k < a.impact_velocities.size(); ++k)
+      expect_csv_close(b.impact_velocities[k], a.impact_velocities[k], a.impact_velocities[k], "δ̇⁻");
+    EXPECT_EQ(files.clearance[c].histogram.counts, in_run.clearance[c].histogram.counts);
+    EXPECT_EQ(files.clearance[c].orbit.size(), in_run.clearance[c].orbit.size());
+  }
+  // Stroboscopic sections interpolated between outputs against those the integrator took at
+  // k·T: the same times and, within 1% of the clearance (the distinct-point tolerance), the same
+  // points. The largest difference is printed (docs/analysis.md quotes it).
+  ASSERT_TRUE(in_run.poincare && files.poincare);
+  ASSERT_EQ(files.poincare->times.size(), in_run.poincare->times.size());
+  ASSERT_GE(in_run.poincare->times.size(), 16u);
+  double worst = 0.0;
+  const double c = in_run.clearance[0].clearance;
+  for (size_t k = 0; k < in_run.poincare->times.size(); ++k) {
+    EXPECT_NEAR(files.poincare->times[k], in_run.poincare->times[k], 1e-12);
+    for (size_t i = 0; i < in_run.poincare->points[k].size(); ++i)
+      worst = std::max(worst, std::abs(files.poincare->points[k][i] - in_run.poincare->points[k][i]));
+  }
+  std::printf("sections: largest difference, interpolated vs located: %.3g m = %.3g of the clearance\n",
+              worst, worst / c);
+  EXPECT_LT(worst, 0.01 * c);
+  EXPECT_EQ(files.poincare->distinct, in_run.poincare->distinct);
+  // The spectra (same samples to 9 digits).
+  ASSERT_EQ(files.spectra.size(), in_run.spectra.size());
+  for (size_t i = 0; i < in_run.spectra.size(); ++i) {
+    double top = 0.0;
+    for (double a : in_run.spectra[i].amplitude) top = std::max(top, a);
+    ASSERT_EQ(files.spectra[i].amplitude.size(), in_run.spectra[i].amplitude.size());
+    for (size_t k = 0; k < in_run.spectra[i].amplitude.size(); ++k)
+      EXPECT_NEAR(files.spectra[i].amplitude[k], in_run.spectra[i].amplitude[k], 1e-6 * top);
+  }
+  // The Lyapunov trajectories start from the state the run made again to its first section
+  // after the transient: the same state, the same exponent.
+  ASSERT_TRUE(in_run.lyapunov && files.lyapunov);
+  ASSERT_TRUE(in_run.lyapunov->ok);
+  EXPECT_EQ(files.lyapunov->t0, in_run.lyapunov->t0);
+  EXPECT_NEAR(files.lyapunov->exponent, in_run.lyapunov->exponent,
+              1e-9 * std::abs(in_run.lyapunov->exponent));
+  EXPECT_EQ(files.verdict.kind, in_run.verdict.kind);
+  EXPECT_EQ(files.verdict.evidence, in_run.verdict.evidence);
+  // What was read and what was simulated now is said.
+  EXPECT_TRUE(mentions(files.provenance.read, "timeseries.csv"));
+  EXPECT_TRUE(mentions(files.provenance.read, "events.csv"));
+  EXPECT_TRUE(mentions(files.provenance.read, "summary.json"));
+  EXPECT_TRUE(mentions(files.provenance.read, "final_state.json"));
+  EXPECT_TRUE(mentions(files.provenance.read, "stroboscopic sections: from the outputs"));
+  EXPECT_TRUE(mentions(files.provenance.resimulated, "ideal twin"));
+  EXPECT_TRUE(mentions(files.provenance.resimulated, "Lyapunov start state"));
+  EXPECT_TRUE(files.provenance.skipped.empty());
+  fs::remove_all(dir);
+}
+
+TEST(RunFolder, ChannelsNotWrittenAreSaidAndTheirSectionsMadeAgain) {
+  // A run that kept only the slider's channels: no eccentricities, so no orbits and no spectrum
+  // of the contact force from the files; the sections come from the main run made again, and
+  // are then exactly the in-run ones.
+  const fs::path dir = temp_dir("subset");
+  lash::AnalysisOptions o;
+  o.lyapunov = false;
+  const lash::RunAnalysis in_run = run_into(dir, {"solver.end_time=0.05"}, o, {"slider.*"});
+  const lash::RunAnalysis files = from_folder(dir, o);
+  EXPECT_TRUE(mentions(files.provenance.skipped, "animation frames: the pose (x, y, phi) of crank"))
+      << ::testing::PrintToString(files.provenance.skipped);
+  EXPECT_TRUE(files.frames.time.empty());
+  EXPECT_TRUE(mentions(files.provenance.skipped, "journal orbits: rod_slider.ex/ey not written"))
+      << ::testing::PrintToString(files.provenance.skipped);
+  EXPECT_TRUE(mentions(files.provenance.skipped, "spectrum of rod_slider.Fn"));
+  EXPECT_TRUE(mentions(files.provenance.resimulated, "stroboscopic sections (their channels were not written)"));
+  ASSERT_TRUE(in_run.poincare && files.poincare);
+  ASSERT_EQ(files.poincare->points.size(), in_run.poincare->points.size());
+  for (size_t k = 0; k < in_run.poincare->points.size(); ++k)
+    EXPECT_EQ(files.poincare->points[k], in_run.poincare->points[k]);
+  EXPECT_TRUE(files.clearance[0].orbit.empty());
+  // Statistics of the channels written, equal to the in-run ones to 9 digits.
+  for (const auto& b : files.statistics) {
+    const auto a = std::find_if(in_run.statistics.begin(), in_run.statistics.end(),
+                                [&](const lash::ChannelStatistics& s) { return s.channel == b.channel; });
+    ASSERT_NE(a, in_run.statistics.end());
+    expect_csv_close(b.max, a->max, a->peak, b.channel);
+  }
+  EXPECT_EQ(files.statistics.size(), files.series.channels.size());
+  fs::remove_all(dir);
+}
+
+TEST(RunFolder, ACutRowIsNamedWithItsLine) {
+  const fs::path dir = temp_dir("cut");
+  lash::AnalysisOptions o;
+  o.lyapunov = false;
+  o.ideal_twin = false;
+  run_into(dir, {"solver.end_time=0.003"}, o);
+  // A row with a field that is not a number, found as the row is read.
+  std::string csv = lash::test::read_file((dir / "timeseries.csv").string());
+  const size_t row3 = [&] {
+    size_t p = 0;
+    for (int i = 0; i < 3; ++i) p = csv.find('\n', p) + 1;
+    return p;
+  }();
+  csv.replace(csv.find(',', row3) + 1, 1, "x");
+  std::ofstream(dir / "timeseries.csv") << csv;
+  try {
+    from_folder(dir, o);
+    FAIL() << "no error";
+  } catch (const lash::RunFolderError& e) {
+    EXPECT_NE(std::string(e.what()).find("timeseries.csv:4:"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("is not a number"), std::string::npos) << e.what();
+  }
+  fs::remove_all(dir);
+}
+
+TEST(RunFolder, SectionsBetweenOutputsAgreeWithThoseTheIntegratorLocated) {
+  // Output intervals that do not divide the period (T = 12 ms): every section is interpolated
+  // through four outputs, and kept only when the estimated error is below a tenth of the point
+  // tolerance (1% of the clearance); otherwise the sections are made again by the integrator and
+  // are the in-run ones exactly. 17 periods; the measured difference is printed.
+  for (const double dt : {1.3e-5, 7e-5}) {
+    const fs::path dir = temp_dir("strobe");
+    lash::AnalysisOptions o;
+    o.lyapunov = false;
+    o.ideal_twin = false;
+    char interval[32];
+    std::snprintf(interval, sizeof interval, "%g", dt);
+    const lash::RunAnalysis in_run =
+        run_into(dir, {"solver.end_time=0.204", std::string("solver.output_interval=") + interval}, o);
+    const lash::RunAnalysis files = from_folder(dir, o);
+    ASSERT_TRUE(in_run.poincare && files.poincare);
+    ASSERT_EQ(files.poincare->times.size(), in_run.poincare->times.size());
+    const double c = in_run.clearance[0].clearance;
+    double worst = 0.0;
+    for (size_t k = 0; k < in_run.poincare->times.size(); ++k) {
+      EXPECT_NEAR(files.poincare->times[k], in_run.poincare->times[k], 1e-12);
+      for (size_t i = 0; i < in_run.poincare->points[k].size(); ++i)
+        worst = std::max(worst, std::abs(files.poincare->points[k][i] - in_run.poincare->points[k][i]));
+    }
+    const bool interpolated = mentions(files.provenance.read, "stroboscopic sections: interpolated");
+    const bool again = mentions(files.provenance.resimulated, "stroboscopic sections (interpolated");
+    EXPECT_NE(interpolated, again) << dt;
+    std::printf("output interval %g s: %s; sections differ from the located ones by at most %.3g m "
+                "= %.3g of the clearance\n", dt, interpolated ? "interpolated" : "made again",
+                worst, worst / c);
+    EXPECT_LT(worst, 1e-3 * c) << dt;
+    if (again) {
+      EXPECT_EQ(worst, 0.0) << dt;
+    }
+    EXPECT_EQ(files.poincare->distinct, in_run.poincare->distinct) << dt;
+    EXPECT_EQ(files.verdict.kind, in_run.verdict.kind) << dt;
+    fs::remove_all(dir);
+  }
+}
