@@ -210,8 +210,13 @@ int main(int argc, char** argv) {
   analyze->add_option("--fft", fft_channels, "Amplitude spectrum of these channels, e.g. slider.ax")
       ->take_all();
   analyze->add_flag("--no-lyapunov", no_lyapunov,
-                    "Skip the largest Lyapunov exponent (two trajectories; computed by default, as "
-                    "by `report`, since the verdict needs it)");
+                    "Skip the Lyapunov exponents (computed by default, as by `report`, since the "
+                    "verdict needs them)");
+  std::string lyapunov_method = "variational";
+  analyze->add_option("--lyapunov-method", lyapunov_method,
+                      "variational (the spectrum from the variational equations with saltation "
+                      "matrices at contact events; default) or two-trajectory (the largest "
+                      "exponent from a pair of runs, a cross-check)");
   std::vector<std::string> planes;
   analyze->add_option("--plane", planes,
                       "Event-based Poincaré section instead of the stroboscopic one: "
@@ -328,6 +333,7 @@ int main(int argc, char** argv) {
       ro.poincare_driver = poincare_driver;
       ro.fft_channels = fft_channels;
       ro.lyapunov_d0 = lyapunov_d0;
+      ro.lyapunov_method = lyapunov_method;
       ro.section_planes = planes;
     }
     install_signal_handlers();
@@ -392,10 +398,18 @@ int main(int argc, char** argv) {
           fmt::print(" {:.6g} Hz ({:.4g})", peaks[k].second, peaks[k].first);
         fmt::print("\n");
       }
-      if (an["lyapunov"].is_object() && !an["lyapunov"]["exponent"].is_null())
-        fmt::print("largest Lyapunov exponent: {:.4g} 1/s over {} renormalisations\n",
-                   an["lyapunov"]["exponent"].get<double>(),
-                   an["lyapunov"]["renormalisations"].get<int>());
+      if (an["lyapunov"].is_object() && !an["lyapunov"]["exponent"].is_null()) {
+        const auto& l = an["lyapunov"];
+        fmt::print("largest Lyapunov exponent: {:.4g} 1/s over {} renormalisations ({})\n",
+                   l["exponent"].get<double>(), l["renormalisations"].get<int>(),
+                   l["method"].get<std::string>());
+        if (l.contains("spectrum") && l["spectrum"].is_array()) {
+          fmt::print("Lyapunov spectrum (1/s):");
+          for (const auto& v : l["spectrum"]) fmt::print(" {:.4g}", v.get<double>());
+          fmt::print("; {} contact events mapped by saltation matrices\n",
+                     l["events_mapped"].get<int>());
+        }
+      }
       fmt::print("verdict: {}", an["verdict"]["class"].get<std::string>());
       for (const auto& e : an["verdict"]["evidence"]) fmt::print("; {}", e.get<std::string>());
       fmt::print("\nrule: {}\n", an["verdict"]["rule"].get<std::string>());
