@@ -61,6 +61,14 @@ int main(int argc, char** argv) {
   for (double l : v.spectrum) std::printf(" %.5g", l);
   std::printf("\n  contact events mapped by saltation matrices: %d (unmapped %d)\n",
               v.events_mapped, v.events_unmapped);
+  // The forward differences' perturbation length should not matter (kTangentStep = 1e-9).
+  for (double step : {1e-8, 1e-10}) {
+    const lash::LyapunovEstimate w = lash::variational_lyapunov(
+        model, y0, period, interval, intervals, period / (2 * M_PI), nullptr, step);
+    std::printf("  with forward-difference step %g:", step);
+    for (double l : w.spectrum) std::printf(" %.5g", l);
+    std::printf("\n");
+  }
   for (double d0 : {1e-8, 1e-7, 1e-6}) {
     lash::AnalysisOptions o;
     const auto t0 = std::chrono::steady_clock::now();

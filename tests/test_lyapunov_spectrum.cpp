@@ -173,7 +173,7 @@ TEST(LyapunovSpectrum, LorenzPublishedSpectrumAndExactSum) {
 /// Forced impact oscillator: x'' + 2ζx' + x = a cos θ, θ' = ω, a rigid stop at x = d with
 /// Newton's restitution v⁺ = −e v⁻. State (x, v, θ); event h = x − d rising.
 struct ImpactOscillator {
-  // Chaotic at these values: λ₁ ≈ 0.15 (measured here by both methods).
+  // Chaotic at these values: λ₁ ≈ 0.167 variational, 0.163 two-trajectory (measured here).
   double zeta = 0.05, a = 1.0, omega = 2.8, d = 0.0, e = 0.8;
   Ride ride() const {
     Ride r;
@@ -271,7 +271,12 @@ TEST(LyapunovSpectrum, ImpactOscillatorSumRuleAndTwoTrajectoryAgreement) {
     lo.intervals = static_cast<int>((t1 - t0) / lo.interval);
     const LyapunovResult two = largest_lyapunov(flow, ys, norm, lo);
     ASSERT_TRUE(two.ok) << two.message;
-    EXPECT_NEAR(two.exponent, l[0], std::max(0.1 * std::abs(l[0]), 0.01))
+    // The measured values, in the XML output (--gtest_output=xml).
+    RecordProperty("variational_l1", std::to_string(l.maxCoeff()));
+    RecordProperty("two_trajectory", std::to_string(two.exponent));
+    RecordProperty("sum", std::to_string(l.sum()));
+    RecordProperty("sum_rule", std::to_string(expected));
+    EXPECT_NEAR(two.exponent, l.maxCoeff(), std::max(0.1 * std::abs(l.maxCoeff()), 0.01))
         << "variational " << l.transpose() << ", two-trajectory " << two.exponent;
   }
 }

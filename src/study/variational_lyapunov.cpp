@@ -21,9 +21,10 @@ namespace {
 class TangentRider final : public Observer {
  public:
   TangentRider(const Model& model, double t0, const Eigen::VectorXd& y0, double interval,
-               double time_scale)
+               double time_scale, double tangent_step)
       : model_(model), ws_(model), nq_(ws_.nq), nt_(2 * ws_.nq + ws_.na), ny_(ws_.ny),
-        interval_(interval), next_(t0 + interval), y_prev_(y0), t_prev_(t0) {
+        step_(tangent_step), interval_(interval), next_(t0 + interval), y_prev_(y0),
+        t_prev_(t0) {
     weights_ = Eigen::VectorXd::Zero(nt_);
     weights_.head(nq_).setOnes();
     weights_.segment(nq_, nq_).setConstant(time_scale);
@@ -76,7 +77,7 @@ class TangentRider final : public Observer {
       if (node == 1 && !have_fm && !(have_fm = f_(t, yt, fm))) return false;
       if (node == 2 && !have_f1 && !(have_f1 = f_(t, yt, f1))) return false;
       const Eigen::VectorXd& f0 = node == 0 ? f_prev_ : (node == 1 ? fm : f1);
-      return forward_difference_jv(f_, t, yt, f0, V, weights_, kTangentStep, JV);
+      return forward_difference_jv(f_, t, yt, f0, V, weights_, step_, JV);
     };
     if (!tangent_rk4_step(jv, t0, t1, spectrum_->vectors()))
       return fail(t1, "the right-hand side cannot be evaluated beside the trajectory");
@@ -121,7 +122,7 @@ class TangentRider final : public Observer {
     // Directional derivatives of the gap δ and its rate δ̇ (central differences).
     auto gap_derivative = [&](const Eigen::VectorXd& v, double& d_delta, double& d_rate) {
       const double len = std::max(v.cwiseProduct(weights_).norm(), 1e-300);
-      const double s = kTangentStep / len;
+      const double s = step_ / len;
       Eigen::VectorXd a = y_minus, b = y_minus;
       a.head(nt_) += s * v;
       b.head(nt_) -= s * v;
@@ -164,7 +165,7 @@ class TangentRider final : public Observer {
 
   /// ∂Φ̇/∂q · δq by central differences of Φ̇(q, q̇, t).
   Eigen::VectorXd phi_dot_q(double t, const Eigen::VectorXd& y, const Eigen::VectorXd& dq) {
-    const double len = std::max(dq.norm(), 1e-300), s = kTangentStep / len;
+    const double len = std::max(dq.norm(), 1e-300), s = step_ / len;
     Eigen::VectorXd a = y, b = y;
     a.head(nq_) += s * dq;
     b.head(nq_) -= s * dq;
@@ -223,6 +224,7 @@ class TangentRider final : public Observer {
   const Model& model_;
   Workspace ws_;  ///< the tangent evaluations' own workspace (the run's stays as it reports)
   int nq_, nt_, ny_;
+  double step_;  ///< forward-difference perturbation length (weighted norm)
   double interval_, next_;
   Eigen::VectorXd weights_, y_prev_, y_ref_, pad_, ydot_;
   double t_prev_;
@@ -238,7 +240,8 @@ class TangentRider final : public Observer {
 
 LyapunovEstimate variational_lyapunov(const Model& model, const Eigen::VectorXd& y_start,
                                       double t_start, double interval, int intervals,
-                                      double time_scale, const std::atomic<int>* interrupt) {
+                                      double time_scale, const std::atomic<int>* interrupt,
+                                      double tangent_step) {
   LyapunovEstimate e;
   e.method = "variational";
   e.interval = interval;
@@ -249,7 +252,8 @@ LyapunovEstimate variational_lyapunov(const Model& model, const Eigen::VectorXd&
   sim.start(t_start, y_start);
   std::unique_ptr<TangentRider> rider;
   try {
-    rider = std::make_unique<TangentRider>(model, t_start, sim.state(), interval, time_scale);
+    rider = std::make_unique<TangentRider>(model, t_start, sim.state(), interval, time_scale,
+                                           tangent_step);
   } catch (const std::exception& ex) {
     e.estimated = true;
     e.message = ex.what();

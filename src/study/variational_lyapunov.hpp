@@ -20,8 +20,11 @@ inline constexpr double kTangentStep = 1e-9;
 /// `time_scale`, s, e.g. period / 2π); auxiliary states are carried, not measured. Returns
 /// method "variational", `spectrum` (descending, 1/s), `exponent` = its first entry and the
 /// histories; `estimated` false (and nothing run) when the drivers fix every coordinate.
+/// `tangent_step` is the forward differences' perturbation length (kTangentStep; other values
+/// only to check that the result does not depend on it).
 LyapunovEstimate variational_lyapunov(const Model& model, const Eigen::VectorXd& y_start,
                                       double t_start, double interval, int intervals,
-                                      double time_scale, const std::atomic<int>* interrupt);
+                                      double time_scale, const std::atomic<int>* interrupt,
+                                      double tangent_step = kTangentStep);
 
 }  // namespace lash
