@@ -14,8 +14,10 @@ double weighted_norm(const Eigen::VectorXd& v, const Eigen::VectorXd& w) {
 }
 
 /// Weighted QR by modified Gram–Schmidt with one reorthogonalisation pass: on return
-/// diag(w) V has orthonormal columns and V_in = V R. False if a column collapses.
-bool weighted_qr(Eigen::MatrixXd& V, const Eigen::VectorXd& w, Eigen::MatrixXd& R) {
+/// diag(w) V has orthonormal columns and V_in = V R. False if a column collapses: what is
+/// left of it is at most `collapse` of its length (0: exactly nothing) or not finite.
+bool weighted_qr(Eigen::MatrixXd& V, const Eigen::VectorXd& w, Eigen::MatrixXd& R,
+                 double collapse) {
   const int p = static_cast<int>(V.cols());
   R = Eigen::MatrixXd::Zero(p, p);
   for (int k = 0; k < p; ++k) {
@@ -26,9 +28,8 @@ bool weighted_qr(Eigen::MatrixXd& V, const Eigen::VectorXd& w, Eigen::MatrixXd& 
         V.col(k) -= c * V.col(j);
         R(j, k) += c;
       }
-    // A column left with round-off only (1e-12 of its length) depended on the others.
     const double r = weighted_norm(V.col(k), w);
-    if (!(r > 1e-12 * before) || !std::isfinite(r)) return false;
+    if (!(r > collapse * before) || !std::isfinite(r)) return false;
     V.col(k) /= r;
     R(k, k) = r;
   }
@@ -86,18 +87,20 @@ TangentSpectrum::TangentSpectrum(Eigen::MatrixXd V0, Eigen::VectorXd weights, do
     : V_(std::move(V0)), w_(std::move(weights)), t0_(t0), t_(t0) {
   if (V_.cols() < 1 || V_.rows() != w_.size())
     throw std::invalid_argument("TangentSpectrum: expected n × p vectors (p ≥ 1) and n weights");
+  // Initial columns left with round-off only (1e-12 of their length) depended on the others.
   Eigen::MatrixXd R;
-  if (!weighted_qr(V_, w_, R))
+  if (!weighted_qr(V_, w_, R, 1e-12))
     throw std::invalid_argument("TangentSpectrum: the initial vectors are dependent");
   log_sum_ = Eigen::VectorXd::Zero(V_.cols());
 }
 
-bool TangentSpectrum::renormalise(double t) {
+bool TangentSpectrum::renormalise(double t, bool record) {
   Eigen::MatrixXd V = V_, R;
-  if (!weighted_qr(V, w_, R)) return false;
+  if (!weighted_qr(V, w_, R, 0.0)) return false;
   for (int k = 0; k < V.cols(); ++k) log_sum_[k] += std::log(R(k, k));
   V_ = std::move(V);
   t_ = t;
+  if (!record) return true;
   ++count_;
   history_time.push_back(t);
   history.push_back(exponents());

@@ -57,10 +57,12 @@ class TangentSpectrum {
   const Eigen::VectorXd& weights() const { return w_; }
   int size() const { return static_cast<int>(V_.cols()); }
 
-  /// QR of diag(w) V = Q R, V ← V R⁻¹, ln|R_ii| accumulated, and the running estimates recorded
-  /// at time t. Returns false (and changes nothing) if a column has collapsed (|R_ii| = 0 or
+  /// QR of diag(w) V = Q R, V ← V R⁻¹, ln|R_ii| accumulated, and (with `record`) the running
+  /// estimates recorded at time t and counted. Unrecorded renormalisations keep the vectors
+  /// apart after a strongly stretching map (a near-grazing contact's saltation matrix is nearly
+  /// of rank one). Returns false (and changes nothing) if a column has collapsed (|R_ii| = 0 or
   /// not finite).
-  bool renormalise(double t);
+  bool renormalise(double t, bool record = true);
 
   /// Running estimates Σ ln|R_ii| / (t − t0), 1/time, in the order of the columns (descending
   /// once the vectors have aligned); zeros before the first renormalisation.

@@ -398,6 +398,10 @@ int main(int argc, char** argv) {
           fmt::print(" {:.6g} Hz ({:.4g})", peaks[k].second, peaks[k].first);
         fmt::print("\n");
       }
+      if (an["lyapunov"].is_object() && an["lyapunov"]["exponent"].is_null() &&
+          !an["lyapunov"]["message"].get<std::string>().empty())
+        fmt::print("Lyapunov exponents not computed: {}\n",
+                   an["lyapunov"]["message"].get<std::string>());
       if (an["lyapunov"].is_object() && !an["lyapunov"]["exponent"].is_null()) {
         const auto& l = an["lyapunov"];
         fmt::print("largest Lyapunov exponent: {:.4g} 1/s over {} renormalisations ({})\n",

@@ -87,6 +87,10 @@ class TangentRider final : public Observer {
     have_f_prev_ = have_f1;
     if (t1 >= next_) {
       project(t1, y, spectrum_->vectors());
+      if (!spectrum_->vectors().allFinite())
+        return fail(t1, "the tangent vectors are not finite (they grew without bound: the "
+                        "tangent RK4 step may be unstable on steps limited by stability; try "
+                        "a smaller rtol)");
       if (!spectrum_->renormalise(t1)) return fail(t1, "the tangent vectors collapsed");
       while (next_ <= t1) next_ += interval_;
     }
@@ -152,6 +156,10 @@ class TangentRider final : public Observer {
       gap_derivative(V.col(c), dd, dr);
       V.col(c) = apply_d(V.col(c)) + jump_rate * (dd / rate);
     }
+    // Orthonormalise at once (not recorded): a near-grazing crossing (small δ̇) stretches
+    // every vector toward one direction, and the next renormalisation may be T/20 away.
+    if (!spectrum_->renormalise(e.t, false))
+      return fail(e.t, "the tangent vectors collapsed at a contact event");
     y_prev_ = y_plus;
     have_f_prev_ = false;
     ++mapped_;
