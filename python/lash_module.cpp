@@ -222,6 +222,7 @@ lash::AnalysisOptions analysis_options(const py::dict& o, std::atomic<int>* inte
     if (k == "ideal_twin") a.ideal_twin = value.cast<bool>();
     else if (k == "lyapunov") a.lyapunov = value.cast<bool>();
     else if (k == "lyapunov_d0") a.lyapunov_d0 = value.cast<double>();
+    else if (k == "lyapunov_method") a.lyapunov_method = value.cast<std::string>();
     else if (k == "poincare_driver") a.poincare_driver = value.cast<std::string>();
     else if (k == "section_planes") a.section_planes = value.cast<std::vector<std::string>>();
     else if (k == "discard_periods") a.discard_periods = value.cast<int>();
@@ -334,6 +335,11 @@ py::dict analyze(const CompiledModel& cm, const py::dict& options) {
   if (ra.lyapunov) {
     const auto& l = *ra.lyapunov;
     py::dict ld;
+    ld["method"] = l.method;
+    ld["spectrum"] = l.spectrum;
+    ld["spectrum_history"] = l.spectrum_history;
+    ld["events_mapped"] = l.events_mapped;
+    ld["events_unmapped"] = l.events_unmapped;
     ld["estimated"] = l.estimated;
     ld["ok"] = l.ok;
     ld["exponent"] = l.exponent;

@@ -1145,26 +1145,38 @@
   }
 
   function renderLyapunov() {
-    const s = section('lyapunov', 'Largest Lyapunov exponent', 'Lyapunov');
+    const s = section('lyapunov', 'Lyapunov exponents', 'Lyapunov');
     const L = analysis.lyapunov;
     if (!L) { notComputed(s); return; }
     const unit = L.unit || '1/s';
+    const method = L.method === 'variational' ? 'variational equations with saltation matrices at contact events'
+      : (L.method === 'two-trajectory' ? 'two trajectories, d0 = ' + fmt(L.d0, 3) + ' m' : null);
     s.append(el('p', {}, el('span', {class: 'big-number', text: 'λ₁ ≈ ' + fmt(L.exponent, 3) + ' ' + unit}),
-      el('span', {class: 'muted', text: '   ' + [isNum(L.renormalisations) ? L.renormalisations + ' renormalisations' : null,
-        isNum(L.interval) ? 'every ' + fmt(L.interval * 1e3) + ' ms' : null].filter(Boolean).join(', ')})));
-    const H = L.history;
+      el('span', {class: 'muted', text: '   ' + [method, isNum(L.renormalisations) ? L.renormalisations + ' renormalisations' : null,
+        isNum(L.interval) ? 'every ' + fmt(L.interval * 1e3) + ' ms' : null,
+        isNum(L.events_mapped) ? L.events_mapped + ' contact events mapped' : null].filter(Boolean).join(', ')})));
+    const spectrum = Array.isArray(L.spectrum) ? L.spectrum : null;
+    if (spectrum) s.append(el('p', {text: 'Spectrum: ' + spectrum.map((v, k) => 'λ' + (k + 1) + ' = ' + fmt(v, 4)).join(', ') + ' ' + unit}));
+    // Running estimates: every exponent of the spectrum, or the largest alone.
+    const SH = Array.isArray(L.spectrum_history) && L.spectrum_history.length ? L.spectrum_history : null;
+    const H = SH || L.history;
     if (!Array.isArray(H) || !H.length) { notComputed(s, 'history'); return; }
-    const ts = H.map((h) => h[0]), vs = H.map((h) => h[1]);
+    const ts = H.map((h) => h[0]);
+    const count = SH ? SH[0].length - 1 : 1;
+    const columns = [];
+    for (let k = 0; k < count; k++) columns.push(H.map((h) => h[k + 1]));
     const tsc = displayScale('s', maxAbsOf([ts]));
-    const b = chartBlock('Running estimate', 'lyapunov', 'a positive limit indicates chaos, zero a periodic or quasi-periodic motion');
+    const b = chartBlock('Running estimates', 'lyapunov', 'a positive limit of λ₁ indicates chaos, zero a periodic or quasi-periodic motion');
     s.append(b.node);
+    const series = [{label: 't [' + tsc.unit + ']', value: (u, v) => (v == null ? '–' : fmt(v * tsc.f))}];
+    for (let k = 0; k < count; k++)
+      series.push({label: 'λ' + (k + 1) + ' [' + unit + ']', stroke: PALETTE[(4 + k) % PALETTE.length], width: 1.4, points: {show: false}, value: (u, v) => fmt(v)});
     makeChart(b.holder, 'lyapunov', {
       height: 230,
       scales: {x: {time: false}, y: {auto: true}},
       axes: [axis({scale: 'x', side: 2, f: tsc.f, label: 'time [' + tsc.unit + ']'}),
-             axis({scale: 'y', side: 3, label: 'λ₁ estimate [' + unit + ']'})],
-      series: [{label: 't [' + tsc.unit + ']', value: (u, v) => (v == null ? '–' : fmt(v * tsc.f))},
-               {label: 'λ₁ [' + unit + ']', stroke: PALETTE[4], width: 1.4, points: {show: false}, value: (u, v) => fmt(v)}],
+             axis({scale: 'y', side: 3, label: 'estimate [' + unit + ']'})],
+      series,
       cursor: {drag: {x: true, y: false}, points: {size: 5}},
       hooks: {draw: [(u) => {
         const y = u.valToPos(0, 'y', true);
@@ -1172,7 +1184,7 @@
         const g = u.ctx; g.save(); g.strokeStyle = '#9aa3b2'; g.setLineDash([4, 4]); g.lineWidth = devicePixelRatio;
         g.beginPath(); g.moveTo(u.bbox.left, y); g.lineTo(u.bbox.left + u.bbox.width, y); g.stroke(); g.restore();
       }]},
-    }, [ts, vs]);
+    }, [ts].concat(columns));
   }
 
   function renderVerdict() {

@@ -602,6 +602,7 @@ TEST(Cli, AnalysisOptionsAreRangeChecked) {
       {"report --window nan,1", "--window nan,1: both times must be finite numbers"},
       {"analyze --discard -1", "--discard -1: expected a whole number of periods"},
       {"analyze --lyapunov-d0 nan", "--lyapunov-d0 nan: expected a separation > 0 m"},
+      {"analyze --lyapunov-method qr", "--lyapunov-method qr: expected variational or two-trajectory"},
       {"analyze --plane slider.x=nan", "value 'nan' is not a finite number"},
       {"report --angle-range 0,inf", "--angle-range 0,inf: both angles must be finite"}};
   for (const auto& [args, message] : cases) {

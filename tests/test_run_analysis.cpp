@@ -2,6 +2,7 @@
 // responses are recognised, the Flores example's results are complete and consistent, statistics
 // over a crank-angle range match the closed form, the Lyapunov estimate carries its inputs, and
 // an extra observer sees exactly the main run.
+#include <algorithm>
 #include <cmath>
 
 #include "study/run_analysis.hpp"
@@ -257,12 +258,39 @@ TEST(RunAnalysis, StatisticsOverACrankAngleRange) {
   EXPECT_THROW(analyse(yaml, {}, o), std::invalid_argument);
 }
 
-TEST(RunAnalysis, LyapunovEstimateCarriesItsInputs) {
-  // Three revolutions of the Flores example: one discarded, two of estimate, 20 renormalisations
-  // each, from the first section after the transient.
+TEST(RunAnalysis, VariationalSpectrumIsTheDefaultAndMakesTheVerdict) {
+  // Three revolutions of the Flores example (DOF 2: 4 exponents), two of them estimated.
   const std::string yaml = read_file(example_path("flores_slider_crank.yaml"));
   AnalysisOptions o;
   o.ideal_twin = false;
+  const Analysed a = analyse(yaml, {"solver.end_time=0.036"}, o);
+  const RunAnalysis& r = a.run;
+  ASSERT_TRUE(r.lyapunov.has_value());
+  const LyapunovEstimate& l = *r.lyapunov;
+  ASSERT_TRUE(l.ok) << l.message;
+  EXPECT_EQ(l.method, "variational");
+  ASSERT_EQ(l.spectrum.size(), 4u);
+  EXPECT_TRUE(std::is_sorted(l.spectrum.rbegin(), l.spectrum.rend()));
+  EXPECT_EQ(l.exponent, l.spectrum[0]);
+  EXPECT_EQ(r.verdict.lyapunov_exponent, l.exponent);
+  EXPECT_EQ(l.renormalisations, l.intervals);
+  ASSERT_EQ(l.spectrum_history.size(), l.history.size());
+  EXPECT_EQ(l.spectrum_history.back(), l.spectrum);
+  // Renormalised at the first step end on or after each T/20 (steps are ~1e-5 s here).
+  EXPECT_GE(l.history.front().first, l.t0 + l.interval - 1e-12);
+  EXPECT_LT(l.history.front().first, l.t0 + l.interval + 1e-4);
+  // Contact events in these two revolutions, every one located and mapped.
+  EXPECT_GT(l.events_mapped, 0);
+  EXPECT_EQ(l.events_unmapped, 0);
+}
+
+TEST(RunAnalysis, LyapunovEstimateCarriesItsInputs) {
+  // Three revolutions of the Flores example: one discarded, two of estimate, 20 renormalisations
+  // each, from the first section after the transient (the two-trajectory method: its d0).
+  const std::string yaml = read_file(example_path("flores_slider_crank.yaml"));
+  AnalysisOptions o;
+  o.ideal_twin = false;
+  o.lyapunov_method = "two-trajectory";
   const Analysed a = analyse(yaml, {"solver.end_time=0.036"}, o);
   const RunAnalysis& r = a.run;
   ASSERT_TRUE(r.result.status.ok);

@@ -20,7 +20,7 @@ Figures (family: file names), in the order of FAMILIES below:
   poincare                    Poincaré-section points
   spectra                     amplitude spectra, logarithmic amplitude axis
   phase                       phase_<x>_vs_<y>: each pair of analysis.phase
-  lyapunov                    running estimate of the largest Lyapunov exponent
+  lyapunov                    running estimates of the Lyapunov exponents (the spectrum)
   driver_torque               driver_torque_<driver> (or driver_force_<driver>)
   energy                      kinetic, potential, dissipated, input energy and the balance drift
 Curves against the crank angle use the time axis instead when there is no crank angle or the run
@@ -843,8 +843,9 @@ def plan_phase(rep):
 def plan_lyapunov(rep):
     import numpy as np
     lya = get(rep.analysis, "lyapunov") or {}
+    # Every exponent of the variational spectrum ([t, λ1, λ2, ...] rows), else the largest.
     try:
-        h = np.asarray(lya.get("history"), dtype=float)
+        h = np.asarray(lya.get("spectrum_history") or lya.get("history"), dtype=float)
     except (TypeError, ValueError):
         h = None
     if h is None or h.ndim != 2 or h.shape[1] < 2 or len(h) < 2:
@@ -857,8 +858,10 @@ def plan_lyapunov(rep):
         scale, t_label = time_unit(rep.time if rep.time is not None else h[:, 0])
         unit = lya.get("unit") or "1/s"
         ax.axhline(0.0, color="0.7", linewidth=0.5, zorder=0)
-        ax.plot(h[:, 0] * scale, h[:, 1], color=COLOR_CLEARANCE, linewidth=0.8,
-                label="Running estimate")
+        for k in range(1, h.shape[1]):
+            ax.plot(h[:, 0] * scale, h[:, k], linewidth=0.8,
+                    color=COLOR_CLEARANCE if k == 1 else None,
+                    label=rf"$\lambda_{k}$ running estimate" if h.shape[1] > 2 else "Running estimate")
         final = lya.get("exponent")
         if isinstance(final, (int, float)) and math.isfinite(final):
             ax.axhline(final, color="black", linewidth=0.6, linestyle=":",
@@ -866,7 +869,8 @@ def plan_lyapunov(rep):
             legend_above(ax, ncol=2)
         ax.set_xlim(0.0 if h[0, 0] >= 0 else h[0, 0] * scale, snap(h[-1, 0] * scale))
         ax.set_xlabel(t_label)
-        ax.set_ylabel(rf"Largest Lyapunov exponent $\lambda_1$ ({unit})")
+        ax.set_ylabel(rf"Lyapunov exponents ({unit})" if h.shape[1] > 2
+                      else rf"Largest Lyapunov exponent $\lambda_1$ ({unit})")
         return fig
     return [Plan("lyapunov", "lyapunov", draw)]
 

@@ -33,15 +33,18 @@ def analyze(model, *, ideal_twin: bool = True, lyapunov: bool = True,
             poincare_driver: str = "", section_planes: Sequence[str] = (),
             discard_periods: int = 1, fft_channels: Sequence[str] = (),
             stats_window: Optional[Tuple[float, float]] = None,
-            lyapunov_d0: float = 0.0, continuous_contact_time: float = 0.0) -> Dict[str, Any]:
+            lyapunov_d0: float = 0.0, continuous_contact_time: float = 0.0,
+            lyapunov_method: str = "variational") -> Dict[str, Any]:
     """Runs `model` (a Model, a model file path, or a Result, whose model and settings are run
     again) with the analyses of a study (C++ lash::analyze_run): the main run, its ideal twin
     (every clearance joint ideal), Poincare sections (stroboscopic once per period of
     `poincare_driver`, default the first constant-speed rotary driver, or event sections on
     `section_planes` such as "slider.vx=0"), spectra of `fft_channels` (default: translational
     bodies' ax and each clearance joint's Fn) after `discard_periods` transient periods,
-    statistics over `stats_window` (t0, t1) s, contact modes, the largest Lyapunov exponent and
-    the periodic / quasi-periodic / chaotic verdict.
+    statistics over `stats_window` (t0, t1) s, contact modes, the Lyapunov exponents
+    (`lyapunov_method` "variational": the spectrum with saltation matrices at contact events;
+    "two-trajectory": the largest exponent, separation `lyapunov_d0`) and the periodic /
+    quasi-periodic / chaotic verdict.
 
     Returns a dict: result (status, integrator), period_driver, period (s), verdict (kind,
     evidence, rule, lyapunov_exponent, ...), poincare (kind, points ndarray (n, 2k), times,
@@ -54,7 +57,7 @@ def analyze(model, *, ideal_twin: bool = True, lyapunov: bool = True,
                             "poincare_driver": poincare_driver,
                             "section_planes": list(section_planes),
                             "discard_periods": discard_periods, "fft_channels": list(fft_channels),
-                            "lyapunov_d0": lyapunov_d0,
+                            "lyapunov_d0": lyapunov_d0, "lyapunov_method": lyapunov_method,
                             "continuous_contact_time": continuous_contact_time}
     if stats_window is not None:
         opts["stats_window"] = tuple(stats_window)

@@ -177,6 +177,7 @@ int main(int argc, char** argv) {
   std::vector<std::string> fft_channels;
   bool no_lyapunov = false;
   int discard_periods = 1;
+  std::string lyapunov_method = "variational";
   std::vector<std::string> planes;
   double lyapunov_d0 = 0.0;
   // The analysis options: the same on both commands, applied to every part of the analyses
@@ -188,14 +189,19 @@ int main(int argc, char** argv) {
     sub->add_option("--fft", fft_channels, "Amplitude spectrum of these channels, e.g. slider.ax")
         ->take_all();
     sub->add_flag("--no-lyapunov", no_lyapunov,
-                  "Skip the largest Lyapunov exponent (two trajectories; computed by default, "
-                  "since the verdict needs it)");
+                  "Skip the Lyapunov exponents (computed by default, since the verdict needs "
+                  "them)");
+    sub->add_option("--lyapunov-method", lyapunov_method,
+                    "variational (the spectrum from the variational equations with saltation "
+                    "matrices at contact events; default) or two-trajectory (the largest "
+                    "exponent from a pair of runs, a cross-check)");
     sub->add_option("--plane", planes,
                     "Event-based Poincaré section instead of the stroboscopic one: "
                     "<body>.<x|y|phi|vx|vy|omega>=VALUE[,down], e.g. slider.vx=0,down");
     sub->add_option("--discard", discard_periods, "Transient periods to discard (default 1)");
     sub->add_option("--lyapunov-d0", lyapunov_d0,
-                    "Separation of the two trajectories, m (default 2e-4 x clearance, <= 1e-7)");
+                    "Separation of the two trajectories (--lyapunov-method two-trajectory), m "
+                    "(default 2e-4 x clearance, <= 1e-7)");
   }
   std::vector<double> window, angle_range;
   for (auto* sub : {report, analyze}) {
@@ -300,6 +306,7 @@ int main(int argc, char** argv) {
     ro.poincare_driver = poincare_driver;
     ro.fft_channels = fft_channels;
     ro.lyapunov_d0 = lyapunov_d0;
+    ro.lyapunov_method = lyapunov_method;
     ro.section_planes = planes;
     install_signal_handlers();
     ro.interrupt = &g_interrupt;
@@ -387,10 +394,22 @@ int main(int argc, char** argv) {
           fmt::print(" {:.6g} Hz ({:.4g})", peaks[k].second, peaks[k].first);
         fmt::print("\n");
       }
-      if (an["lyapunov"].is_object() && !an["lyapunov"]["exponent"].is_null())
-        fmt::print("largest Lyapunov exponent: {:.4g} 1/s over {} renormalisations\n",
-                   an["lyapunov"]["exponent"].get<double>(),
-                   an["lyapunov"]["renormalisations"].get<int>());
+      if (an["lyapunov"].is_object() && an["lyapunov"]["exponent"].is_null() &&
+          !an["lyapunov"]["message"].get<std::string>().empty())
+        fmt::print("Lyapunov exponents not computed: {}\n",
+                   an["lyapunov"]["message"].get<std::string>());
+      if (an["lyapunov"].is_object() && !an["lyapunov"]["exponent"].is_null()) {
+        const auto& l = an["lyapunov"];
+        fmt::print("largest Lyapunov exponent: {:.4g} 1/s over {} renormalisations ({})\n",
+                   l["exponent"].get<double>(), l["renormalisations"].get<int>(),
+                   l["method"].get<std::string>());
+        if (l.contains("spectrum") && l["spectrum"].is_array()) {
+          fmt::print("Lyapunov spectrum (1/s):");
+          for (const auto& v : l["spectrum"]) fmt::print(" {:.4g}", v.get<double>());
+          fmt::print("; {} contact events mapped by saltation matrices\n",
+                     l["events_mapped"].get<int>());
+        }
+      }
       fmt::print("verdict: {}", an["verdict"]["class"].get<std::string>());
       for (const auto& e : an["verdict"]["evidence"]) fmt::print("; {}", e.get<std::string>());
       fmt::print("\nrule: {}\n", an["verdict"]["rule"].get<std::string>());

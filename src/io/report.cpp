@@ -98,10 +98,26 @@ json lyapunov_json(const std::optional<LyapunovEstimate>& l) {
             {"history", json::array()}, {"message", l->message}};
   json hist = json::array();
   for (const auto& [t, e] : l->history) hist.push_back({r6(t), r6(e)});
-  return {{"exponent", l->ok ? json(l->exponent) : json(nullptr)},
-          {"unit", "1/s"}, {"renormalisations", l->renormalisations},
-          {"interval", l->interval}, {"d0", l->d0}, {"history", hist},
-          {"message", l->message}};
+  json j = {{"method", l->method},
+            {"exponent", l->ok ? json(l->exponent) : json(nullptr)},
+            {"unit", "1/s"}, {"renormalisations", l->renormalisations},
+            {"interval", l->interval}, {"history", hist}, {"message", l->message}};
+  if (l->method == "two-trajectory") {
+    j["d0"] = l->d0;
+  } else {
+    // The whole spectrum with its convergence: [time, λ1, λ2, …] rows.
+    j["spectrum"] = l->ok ? json(r6(l->spectrum)) : json(nullptr);
+    json sh = json::array();
+    for (size_t h = 0; h < l->spectrum_history.size(); ++h) {
+      json row = json::array({r6(l->history[h].first)});
+      for (double v : l->spectrum_history[h]) row.push_back(r6(v));
+      sh.push_back(row);
+    }
+    j["spectrum_history"] = sh;
+    j["events_mapped"] = l->events_mapped;
+    j["events_unmapped"] = l->events_unmapped;
+  }
+  return j;
 }
 
 /// The figures tool, found relative to the installed files rather than a path built in: at

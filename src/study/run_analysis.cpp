@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "analysis/signal.hpp"
+#include "study/variational_lyapunov.hpp"
 
 namespace lash {
 
@@ -483,6 +484,7 @@ LyapunovEstimate lyapunov_from(const Model& model, const Eigen::VectorXd& y_star
   const LyapunovResult lr = largest_lyapunov(flow, y_start, norm, lo, perturb);
 
   LyapunovEstimate e;
+  e.method = "two-trajectory";
   e.estimated = true;
   e.ok = lr.ok;
   if (lr.ok) e.exponent = lr.exponent;
@@ -576,6 +578,8 @@ void check_options(const AnalysisOptions& o) {
     bad("--period " + fmt_g(o.period), "expected a positive period in seconds");
   if (o.discard_periods < 0 || o.discard_periods > 1000000)
     bad("--discard " + std::to_string(o.discard_periods), "expected a whole number of periods in [0, 1e6]");
+  if (o.lyapunov_method != "variational" && o.lyapunov_method != "two-trajectory")
+    bad("--lyapunov-method " + o.lyapunov_method, "expected variational or two-trajectory");
   if (!std::isfinite(o.lyapunov_d0) || o.lyapunov_d0 < 0 || o.lyapunov_d0 > 1e-3)
     bad("--lyapunov-d0 " + fmt_g(o.lyapunov_d0),
         "expected a separation > 0 m and at most 1e-3 m, far below the clearance (or 0 for the "
@@ -895,7 +899,8 @@ RunAnalysis analyze_samples(const Model& model, const AnalysisOptions& o, Plan& 
     out.spectra.push_back(std::move(cs));
   }
 
-  // Largest Lyapunov exponent, renormalised 20 times per period, over the run after the
+  // Lyapunov exponents (variational spectrum, or the largest by two trajectories),
+  // renormalised 20 times per period, over the run after the
   // transient (at least one period of it).
   double lyap = std::nan("");
   if (o.lyapunov && p.free_coordinates == 0) {
@@ -906,8 +911,12 @@ RunAnalysis analyze_samples(const Model& model, const AnalysisOptions& o, Plan& 
     const double interval = p.period / 20.0;
     const int intervals = static_cast<int>((s.end_time - lyapunov_t0) / interval);
     if (intervals >= 20) {
-      out.lyapunov = lyapunov_from(model, *lyapunov_start, lyapunov_t0, interval, intervals,
-                                   o.lyapunov_d0, o.interrupt);
+      out.lyapunov =
+          o.lyapunov_method == "two-trajectory"
+              ? lyapunov_from(model, *lyapunov_start, lyapunov_t0, interval, intervals,
+                              o.lyapunov_d0, o.interrupt)
+              : variational_lyapunov(model, *lyapunov_start, lyapunov_t0, interval, intervals,
+                                     p.period / (2 * M_PI), o.interrupt);
       lyap = out.lyapunov->exponent;
     }
   }

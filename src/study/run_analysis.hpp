@@ -25,8 +25,11 @@ namespace lash {
 /// What to analyse and how finely to keep it.
 struct AnalysisOptions {
   bool ideal_twin = true;           ///< run the model with every clearance joint ideal
-  bool lyapunov = true;             ///< estimate the largest Lyapunov exponent
-  double lyapunov_d0 = 0.0;         ///< separation, m (0: 2e-4 × the smallest clearance, ≤ 1e-7)
+  bool lyapunov = true;             ///< estimate the Lyapunov exponents
+  /// "variational" (the spectrum, saltation matrices at events) or "two-trajectory" (the
+  /// largest exponent from a pair of runs; a cross-check).
+  std::string lyapunov_method = "variational";
+  double lyapunov_d0 = 0.0;         ///< two-trajectory separation, m (0: 2e-4 × the smallest clearance, ≤ 1e-7)
   std::string poincare_driver;      ///< driver whose period sets the sections ("" = first rotary)
   /// Event-based sections instead of stroboscopic ones: "<body>.<x|y|phi|vx|vy|omega>=V[,down]".
   std::vector<std::string> section_planes;
@@ -163,9 +166,17 @@ struct PhasePortrait {
   std::string x, y;
 };
 
-/// The largest Lyapunov exponent by two trajectories (analysis/dynamics_analysis.hpp), with its
-/// inputs.
+/// The Lyapunov exponents with their inputs: by the variational equations with saltation
+/// matrices (the spectrum, study/variational_lyapunov.hpp), or the largest by two trajectories
+/// (analysis/dynamics_analysis.hpp).
 struct LyapunovEstimate {
+  std::string method = "two-trajectory";  ///< "variational" or "two-trajectory"
+  /// Variational only: the 2·DOF exponents, descending, 1/s, and their running estimates at
+  /// every history time; the contact events mapped by saltation matrices and those corrected at
+  /// an output (no located crossing, not mapped).
+  std::vector<double> spectrum;
+  std::vector<std::vector<double>> spectrum_history;
+  int events_mapped = 0, events_unmapped = 0;
   /// False when the drivers fix every coordinate: no free direction, nothing was run (`message`
   /// says so); the fields below are then unset.
   bool estimated = false;
@@ -174,7 +185,7 @@ struct LyapunovEstimate {
   int renormalisations = 0;
   double interval = 0.0;           ///< s between renormalisations (period / 20)
   int intervals = 0;               ///< renormalisation intervals asked for
-  double d0 = 0.0;                 ///< separation in configuration space, m and rad
+  double d0 = 0.0;                 ///< two-trajectory: separation in configuration space, m and rad
   double t0 = 0.0;                 ///< start: the first section after the transient, s
   std::vector<std::pair<double, double>> history;  ///< (time s, running estimate 1/s)
   std::string message;
