@@ -479,3 +479,39 @@ solver: {end_time: 1.0, output_interval: 0.1, initial_state: given}
   for (size_t i = 0; i < pool.size(); ++i)
     check(pool[i], 0.2 + 0.1 * i, "after erase, element " + std::to_string(i));
 }
+
+TEST(InitialState, ADriverBetweenTwoFreeBodiesSplitsItsSpeedWithZeroAngularMomentum) {
+  // A rotor and a stator on one pivot, the stator free to turn on the ground, the driver setting
+  // the rotor's angle relative to the stator at ω = 10 rad/s. Started from rest by the drive (the
+  // least kinetic energy, Gauss's principle), their angular momentum stays zero:
+  // ω_stator = −I_r ω / (I_r + I_s) = −2.5, ω_rotor = I_s ω / (I_r + I_s) = 7.5 rad/s — whatever
+  // the units of the coordinates (a Euclidean minimum norm would give ∓5 rad/s).
+  const std::string yaml = R"(
+ground: {markers: {O: [0, 0]}}
+bodies:
+  stator: {mass: 2.0, inertia: 3.0, position: [0, 0], markers: {O: [0, 0]}}
+  rotor: {mass: 1.0, inertia: 1.0, position: [0, 0], markers: {O: [0, 0]}}
+joints:
+  bearing: {type: revolute, journal: stator.O, bearing: ground.O}
+  shaft: {type: revolute, journal: rotor.O, bearing: stator.O}
+drivers:
+  motor: {joint: shaft, speed: 10}
+solver: {end_time: 0.1, output_interval: 0.01}
+)";
+  const Model m = load_model_text(yaml, "motor.yaml").model;
+  Workspace ws(m);
+  const Eigen::VectorXd y = initial_state(m, ws);
+  const double omega_stator = y[ws.nq + ws.blocks[0].rot], omega_rotor = y[ws.nq + ws.blocks[1].rot];
+  EXPECT_NEAR(omega_stator, -2.5, 1e-12);
+  EXPECT_NEAR(omega_rotor, 7.5, 1e-12);
+  // And the run keeps it so (no torque acts on the pair from outside).
+  struct Momentum : Observer {
+    void output(double, const Eigen::VectorXd& y, const Workspace& w) override {
+      worst = std::max(worst, std::abs(3.0 * y[w.nq + w.blocks[0].rot] + 1.0 * y[w.nq + w.blocks[1].rot]));
+    }
+    double worst = 0.0;
+  } momentum;
+  Workspace run(m);
+  ASSERT_TRUE(simulate(m, run, momentum).status.ok);
+  EXPECT_LT(momentum.worst, 1e-9);
+}

@@ -113,4 +113,34 @@ solver: {rtol: 1e-9, atol: 1e-12, end_time: 300, output_interval: 0.25, initial_
 }
 
 }  // namespace
+TEST(VariationalLyapunov, CoulombFrictionFallsBackToTwoTrajectoriesAndSaysWhy) {
+  // Coulomb friction jumps where the sliding velocity changes sign, which no event locates: the
+  // analysis uses two trajectories there and says why; a continuous law keeps the variational
+  // spectrum.
+  for (const std::string law : {"coulomb", "ambrosio"}) {
+    SCOPED_TRACE(law);
+    std::vector<std::string> set{"solver.end_time=0.036", "clearance_defaults.friction.law=" + law,
+                                 "clearance_defaults.friction.mu=0.05"};
+    if (law == "ambrosio") {
+      set.push_back("clearance_defaults.friction.v0=1.0e-4");
+      set.push_back("clearance_defaults.friction.v1=1.0e-3");
+    }
+    const Model model =
+        load_model_file(std::string(LASH_SOURCE_DIR) + "/examples/flores_slider_crank.yaml", set).model;
+    AnalysisOptions o;
+    o.ideal_twin = false;
+    const RunAnalysis a = analyze_run(model, o);
+    ASSERT_TRUE(a.lyapunov.has_value());
+    if (law == "coulomb") {
+      EXPECT_EQ(a.lyapunov->method, "two-trajectory");
+      EXPECT_NE(a.lyapunov->note.find("joint 'rod_slider' has Coulomb friction"), std::string::npos)
+          << a.lyapunov->note;
+    } else {
+      EXPECT_EQ(a.lyapunov->method, "variational");
+      EXPECT_TRUE(a.lyapunov->note.empty()) << a.lyapunov->note;
+    }
+    EXPECT_TRUE(a.lyapunov->ok) << a.lyapunov->message;
+  }
+}
+
 }  // namespace lash

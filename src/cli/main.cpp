@@ -403,6 +403,7 @@ int main(int argc, char** argv) {
         fmt::print("largest Lyapunov exponent: {:.4g} 1/s over {} renormalisations ({})\n",
                    l["exponent"].get<double>(), l["renormalisations"].get<int>(),
                    l["method"].get<std::string>());
+        if (l.contains("note")) fmt::print("  ({})\n", l["note"].get<std::string>());
         if (l.contains("spectrum") && l["spectrum"].is_array()) {
           fmt::print("Lyapunov spectrum (1/s):");
           for (const auto& v : l["spectrum"]) fmt::print(" {:.4g}", v.get<double>());

@@ -373,11 +373,16 @@ Eigen::VectorXd initial_state(const Model& model, Workspace& ws) {
                              std::to_string(residual) +
                              "); check the markers and initial positions");
 
-  // Velocities: Φ_q q̇ = −Φ_t, least-squares correction of the initial guess.
+  // Velocities: Φ_q q̇ = −Φ_t by the correction of the initial guess with the least kinetic
+  // energy, Δ = M^{-1/2} (Φ_q M^{-1/2})⁺ Φ̇ (Gauss's principle): from rest (`ideal`) that is the
+  // motion a drive started impulsively gives — a body no driver moves stays at rest, and a driver
+  // between two otherwise free bodies splits its motion so that their momentum is conserved.
+  // Unlike a Euclidean minimum norm it does not depend on the units of the coordinates.
   update_kin(ws, y.data());
   build_constraints(model, ws, 0.0, y.data(), ideal, phi, phi_q, &phi_dot, nullptr);
-  Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(phi_q);
-  y.segment(nq, nq) -= cod.solve(phi_dot);
+  const Eigen::VectorXd root_minv = ws.minv.cwiseSqrt();
+  Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(phi_q * root_minv.asDiagonal());
+  y.segment(nq, nq) -= root_minv.cwiseProduct(cod.solve(phi_dot));
 
   if (const std::string why = constraint_problem(model, ws, 0.0, y, false); !why.empty())
     throw std::runtime_error(why);

@@ -102,6 +102,7 @@ json lyapunov_json(const std::optional<LyapunovEstimate>& l) {
             {"exponent", l->ok ? json(l->exponent) : json(nullptr)},
             {"unit", "1/s"}, {"renormalisations", l->renormalisations},
             {"interval", l->interval}, {"history", hist}, {"message", l->message}};
+  if (!l->note.empty()) j["note"] = l->note;
   if (l->method == "two-trajectory") {
     j["d0"] = l->d0;
   } else {

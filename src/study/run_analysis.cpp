@@ -911,12 +911,23 @@ RunAnalysis analyze_samples(const Model& model, const AnalysisOptions& o, Plan& 
     const double interval = p.period / 20.0;
     const int intervals = static_cast<int>((s.end_time - lyapunov_t0) / interval);
     if (intervals >= 20) {
-      out.lyapunov =
-          o.lyapunov_method == "two-trajectory"
-              ? lyapunov_from(model, *lyapunov_start, lyapunov_t0, interval, intervals,
-                              o.lyapunov_d0, o.interrupt)
-              : variational_lyapunov(model, *lyapunov_start, lyapunov_t0, interval, intervals,
-                                     p.period / (2 * M_PI), o.interrupt);
+      // Coulomb friction jumps where a journal's sliding velocity changes sign, a crossing no
+      // event locates: the variational equations do not hold across it (their Jacobian-vector
+      // products straddle the jump), so the two-trajectory method is used instead, and said so.
+      std::string coulomb;
+      for (const Joint& j : model.joints)
+        if (coulomb.empty() && j.clearance && j.clearance->friction_law == FrictionLaw::coulomb)
+          coulomb = j.name;
+      const bool two = o.lyapunov_method == "two-trajectory" || !coulomb.empty();
+      out.lyapunov = two ? lyapunov_from(model, *lyapunov_start, lyapunov_t0, interval, intervals,
+                                         o.lyapunov_d0, o.interrupt)
+                         : variational_lyapunov(model, *lyapunov_start, lyapunov_t0, interval,
+                                                intervals, p.period / (2 * M_PI), o.interrupt);
+      if (o.lyapunov_method != "two-trajectory" && !coulomb.empty())
+        out.lyapunov->note = "two trajectories instead of the variational spectrum: joint '" +
+                             coulomb + "' has Coulomb friction, whose force jumps where the "
+                             "sliding velocity changes sign (a continuous law — ambrosio, "
+                             "adams_stepped, lugre — allows the variational method)";
       lyap = out.lyapunov->exponent;
     }
   }

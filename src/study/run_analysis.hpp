@@ -189,6 +189,9 @@ struct LyapunovEstimate {
   double t0 = 0.0;                 ///< start: the first section after the transient, s
   std::vector<std::pair<double, double>> history;  ///< (time s, running estimate 1/s)
   std::string message;
+  /// Why `method` is not the one asked for ("" when it is): the variational equations need a
+  /// right-hand side that is smooth between located events, which Coulomb friction is not.
+  std::string note;
 };
 
 /// periodic / quasi-periodic / chaotic / undetermined, and what it rests on.
