@@ -25,7 +25,10 @@ Figures (family: file names), in the order of FAMILIES below:
   energy                      kinetic, potential, dissipated, input energy and the balance drift
 Curves against the crank angle use the time axis instead when there is no crank angle or the run
 is too long to read (more than MAX_REVOLUTIONS_ON_ANGLE_AXIS revolutions). The ideal twin is
-drawn dashed grey wherever series.ideal has the channel.
+drawn dashed grey wherever series.ideal has the channel. When the statistics were taken over a
+window narrower than the run (`lash report --window T0,T1`: analysis.statistics.*.window), the
+curves against the motion, the contact modes and the energy show that window only, so figures
+and statistics describe the same time.
 
 Each channel's unit and description come from report_data.json's channel_info, which the engine
 writes; the display scale (mm, kN, 10³ m/s²) is chosen from that unit. A channel that
@@ -225,9 +228,10 @@ def read_envelopes(csv_path, columns, t0, t1, buckets=ENVELOPE_BUCKETS):
 class XAxis:
     """The abscissa of curves against the motion: unwrapped crank angle (deg) or time."""
 
-    def __init__(self, time, angle_deg):
+    def __init__(self, time, angle_deg, window=None):
         import numpy as np
         self.time = time
+        self.window = window              # (t0, t1) s shown, or None: the whole run
         self.kind = "time"
         self.t_scale, self.t_label = time_unit(time)
         if angle_deg is not None and len(angle_deg) == len(time) and len(time) > 1 \
@@ -250,9 +254,10 @@ class XAxis:
 
     def apply(self, ax):
         """Label, limits and ticks of an axis against this abscissa."""
+        import numpy as np
         from matplotlib.ticker import MultipleLocator
         ax.set_xlabel(self.label())
-        x = self.of_time(self.time[[0, -1]])
+        x = self.of_time(np.asarray(self.window) if self.window else self.time[[0, -1]])
         if self.kind == "angle":
             span = abs(x[1] - x[0])
             step = next((s for s in (45, 90, 180, 360, 720, 1440) if span / s <= 8), 1440)
@@ -291,13 +296,37 @@ class Report:
         self._channels = series.get("channels") if isinstance(series.get("channels"), dict) else {}
         self._ideal = series.get("ideal") if isinstance(series.get("ideal"), dict) else {}
         self.xaxis = None
-        if self.time is not None:
-            self.xaxis = XAxis(self.time, as_array(series.get("crank_angle")))
         self.analysis = data.get("analysis") if isinstance(data.get("analysis"), dict) else {}
+        self.window = self._statistics_window()
+        if self.time is not None:
+            self.xaxis = XAxis(self.time, as_array(series.get("crank_angle")), self.window)
         self.model = data.get("model") if isinstance(data.get("model"), dict) else {}
         info = data.get("channel_info")
         self._info = info if isinstance(info, dict) else {}
         self.full = {}                      # name -> Envelope, filled by read_full_resolution
+
+    def _statistics_window(self):
+        """(t0, t1) of the statistics window when it is narrower than the series, else None."""
+        stats = self.analysis.get("statistics")
+        if self.time is None or not isinstance(stats, dict):
+            return None
+        for v in stats.values():
+            w = v.get("window") if isinstance(v, dict) else None
+            if isinstance(w, list) and len(w) == 2 and all(isinstance(x, (int, float)) for x in w):
+                t0, t1 = max(float(w[0]), float(self.time[0])), min(float(w[1]), float(self.time[-1]))
+                span = float(self.time[-1] - self.time[0])
+                if t1 > t0 and (t0 - self.time[0] > 1e-9 * span or self.time[-1] - t1 > 1e-9 * span):
+                    return (t0, t1)
+                return None
+        return None
+
+    def clip(self, t, *values):
+        """t and the arrays sampled at t restricted to the statistics window (all of them
+        without one)."""
+        if self.window is None or t is None:
+            return (t,) + values
+        keep = (t >= self.window[0]) & (t <= self.window[1])
+        return (t[keep],) + tuple(v[keep] if v is not None else None for v in values)
 
     def channel_names(self):
         return list(self._channels)
@@ -490,7 +519,11 @@ def draw_vs_motion(rep, ax, channel, ideal=None, legend=True):
     t, lo, hi = rep.curve(channel)
     if lo is None:
         raise Skip(f"no channel {channel}")
-    ideal_v = rep.ideal(ideal or channel)
+    same = lo is hi
+    t, lo, hi = rep.clip(t, lo, hi)
+    if same:
+        hi = lo
+    ideal_t, ideal_v = rep.clip(rep.time, rep.ideal(ideal or channel))
     peak = max(np.nanmax(np.abs(np.concatenate([lo, hi]))) if np.any(np.isfinite(lo)) else 0.0,
                np.nanmax(np.abs(ideal_v)) if ideal_v is not None else 0.0)
     scale, unit_label = scaled_unit(rep.unit(channel), peak)
@@ -503,7 +536,7 @@ def draw_vs_motion(rep, ax, channel, ideal=None, legend=True):
                         edgecolor=COLOR_CLEARANCE, linewidth=0.6, zorder=2)
     ax.add_line(Line2D([], [], color=COLOR_CLEARANCE, linewidth=0.6, label="Clearance joint"))
     if ideal_v is not None:
-        ax.plot(rep.xaxis.of_time(rep.time), ideal_v * scale, label="Ideal joint", zorder=3,
+        ax.plot(rep.xaxis.of_time(ideal_t), ideal_v * scale, label="Ideal joint", zorder=3,
                 **IDEAL_STYLE)
     if legend and ideal_v is not None:
         legend_above(ax, ncol=2)
@@ -660,7 +693,7 @@ def plan_modes(rep):
         from matplotlib.ticker import NullLocator
         fig, (ax,) = new_figure(width=DOUBLE_COLUMN_IN, height=0.75 + 0.32 * len(rows))
         scale, t_label = time_unit(rep.time)
-        t0, t1 = float(rep.time[0]), float(rep.time[-1])
+        t0, t1 = rep.window or (float(rep.time[0]), float(rep.time[-1]))
         kinds = []
         for i, (j, spans, shares) in enumerate(rows):
             y = len(rows) - 1 - i
@@ -908,18 +941,22 @@ def plan_energy(rep):
                                  gridspec_kw={"height_ratios": [3, 1][:rows]})
         axes = list(axes[:, 0])
         scale_t, t_label = time_unit(rep.time)
-        t = rep.time * scale_t
-        peak = max(float(np.nanmax(np.abs(rep.channel("energy." + k)))) for k in parts)
+        shown, *curves = rep.clip(rep.time, *(rep.channel("energy." + k) for k in parts),
+                                  balance)
+        energy = dict(zip(parts, curves[:len(parts)]))
+        shown_balance = curves[len(parts)]
+        t = shown * scale_t
+        peak = max(float(np.nanmax(np.abs(energy[k]))) for k in parts)
         # One axis for all parts: its unit is theirs when the data gives them one and the same.
         units = {rep.unit("energy." + k) for k in parts}
         scale, unit = scaled_unit(units.pop() if len(units) == 1 else "", peak)
         for k in parts:
-            axes[0].plot(t, rep.channel("energy." + k) * scale, color=ENERGY_COLORS[k],
+            axes[0].plot(t, energy[k] * scale, color=ENERGY_COLORS[k],
                          linewidth=0.8, label=quantity_text(rep, "energy." + k))
         axes[0].set_ylabel(f"Energy ({unit})" if unit else "Energy")
         legend_above(axes[0], ncol=2)
         if balance is not None:
-            drift = balance - balance[0]
+            drift = shown_balance - balance[0]
             s, u = scaled_unit(rep.unit("energy.balance"), float(np.nanmax(np.abs(drift))) or 1.0)
             axes[1].plot(t, drift * s, color="black", linewidth=0.7)
             axes[1].set_ylabel(f"Balance drift ({u})" if u else "Balance drift")

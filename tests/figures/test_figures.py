@@ -284,6 +284,32 @@ class FiguresOfASyntheticRun(unittest.TestCase):
         self.assertEqual(rep.full["slider.ax"].peak, abs(SPIKE_AX))
         self.assertEqual(float(rep.full["slider.ax"].lo.min()), SPIKE_AX)
 
+    def test_a_statistics_window_narrows_the_curves_to_it(self):
+        # `lash report --window T0,T1` takes the statistics over [T0, T1]; the curves against the
+        # motion then show that window only (here the second revolution: 360° to 720°).
+        import matplotlib.pyplot as plt
+        report = copy.deepcopy(self.report)
+        for v in report["analysis"]["statistics"].values():
+            v["window"] = [END / 2, END]
+        rep = lash_figures.Report(self.run_dir, report)
+        self.assertEqual(rep.window, (END / 2, float(rep.time[-1])))
+        lo, hi = rep.xaxis.of_time(np.array(rep.window))
+        with plt.rc_context(lash_figures.STYLE):
+            fig = lash_figures.plan_contact_force(rep)[0].draw()
+        try:
+            ax = fig.axes[0]
+            self.assertAlmostEqual(ax.get_xlim()[0], lo, delta=1e-6 * abs(hi))
+            self.assertAlmostEqual(ax.get_xlim()[1], hi, delta=0.01 * abs(hi))
+            drawn = [x for line in ax.get_lines() for x in np.asarray(line.get_xdata(), float)]
+            drawn += [p[0] for c in ax.collections for path in c.get_paths() for p in path.vertices]
+            self.assertGreater(len(drawn), 10)
+            self.assertGreaterEqual(min(drawn), lo - 1e-9 * abs(hi))
+        finally:
+            plt.close(fig)
+        # The run's own window (the whole run): no narrowing.
+        whole = lash_figures.Report(self.run_dir, self.report)
+        self.assertIsNone(whole.window)
+
     def test_units_and_descriptions_come_from_channel_info(self):
         info = self.report["channel_info"]
         self.assertEqual(info["acc1.a"], {"unit": "m/s²",
