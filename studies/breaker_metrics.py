@@ -53,12 +53,10 @@ def first_crossing(ts, vs, level):
     return float("nan")
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("folder")
-    ap.add_argument("--csv", help="also write the table here")
-    a = ap.parse_args()
-    db = sqlite3.connect(os.path.join(a.folder, "study.db"))
+def derived(folder):
+    """(header, rows) of the derived measures of every run of the study in `folder`; a run
+    without a completed ideal twin has empty measures."""
+    db = sqlite3.connect(f"file:{os.path.join(folder, 'study.db')}?mode=ro", uri=True)
     params = [r[0] for r in db.execute("select name from parameters order by position")]
     cols = ", ".join(f'"{p}"' for p in params)
     runs = {}
@@ -98,6 +96,16 @@ def main():
         table.append(row + [f"{stroke * 1e3:.3f}", f"{(stroke - twin_stroke) * 1e3:.3f}", f"{delay * 1e3:.3f}",
                             f"{m['moving_contact.vx.peak']:.3f}", f"{m['moving_contact.ax.peak']:.1f}",
                             f"{m['J.F.peak']:.0f}"])
+    db.close()
+    return header, table
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("folder")
+    ap.add_argument("--csv", help="also write the table here")
+    a = ap.parse_args()
+    header, table = derived(a.folder)
     w = csv.writer(sys.stdout)
     w.writerow(header)
     w.writerows(table)

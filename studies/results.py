@@ -13,6 +13,9 @@ A claims module is studies/claims/<study name>.py. It may define
            every contact share and impact count);
   claims(runs) -> list of Markdown paragraphs, computed from the numbers: `runs` is a list of
            dicts {"run", "params" (name → level), "status", "verdict", "metrics" (name → value)};
+  folder_claims(folder, runs) -> the same, for claims that need more of study.db than the
+           metrics (the kept series: the breaker studies' stroke deviation); used instead of
+           claims when defined;
   FIGURES: a list of {"file", "title", "metric", "ylabel", "x", "series"}: one SVG line chart
            each (written beside RESULTS.md and shown in it), the metric against the levels of
            parameter "x", one line per level of parameter "series".
@@ -164,9 +167,11 @@ def write(folder, copy_to=None):
     for spec in getattr(module, "FIGURES", []) if module else []:
         svgs[spec["file"]] = figure(spec, runs)
         out += [f"![{spec['title']}]({spec['file']})", ""]
-    if module and hasattr(module, "claims"):
+    if module and (hasattr(module, "folder_claims") or hasattr(module, "claims")):
         out += ["## Against the paper", ""]
-        for paragraph in module.claims(runs):
+        paragraphs = (module.folder_claims(folder, runs) if hasattr(module, "folder_claims")
+                      else module.claims(runs))
+        for paragraph in paragraphs:
             out += [paragraph, ""]
     text = "\n".join(out)
     targets = [os.path.join(folder, "RESULTS.md")]
