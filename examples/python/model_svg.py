@@ -1,6 +1,6 @@
 """Draws a planar model at its initial poses (as written in the file) as an SVG.
 
-    python3 examples/python/breaker_linkage_svg.py examples/breaker_linkage.yaml docs/breaker_linkage.svg
+    python3 examples/python/model_svg.py examples/breaker_linkage.yaml docs/breaker_linkage.svg
 
 Each rigid body is drawn as the polygon through its markers (a line for a two-marker link), each
 ground marker used by a revolute joint as a frame pivot, each translational joint as a dashed
@@ -35,7 +35,21 @@ def main(model_file, svg_file):
     defaults = m.get("clearance_defaults", {})
     pts = [world(n, k, bodies, ground) for n, b in bodies.items() for k in b.get("markers", {})]
     pts += [tuple(p) for p in ground.values()]
+    # Guide lines: 0.6 m along each translational joint's axis, centred where its slider sits.
+    guides = []
+    for name, j in m["joints"].items():
+        if j["type"] == "translational":
+            g, sl = point(j["guide"], bodies, ground), point(j["slider"], bodies, ground)
+            ax = j.get("axis", [1, 0])
+            n = math.hypot(*ax)
+            u = (ax[0] / n, ax[1] / n)
+            along = (sl[0] - g[0]) * u[0] + (sl[1] - g[1]) * u[1]
+            c = (g[0] + along * u[0], g[1] + along * u[1])
+            guides.append((name, (c[0] - 0.3 * u[0], c[1] - 0.3 * u[1]), (c[0] + 0.3 * u[0], c[1] + 0.3 * u[1])))
+            pts += [guides[-1][1], guides[-1][2]]
     x0, x1 = min(p[0] for p in pts) - 0.15, max(p[0] for p in pts) + 0.15
+    if x1 - x0 < 1.0:  # room for the labels
+        x0, x1 = (x0 + x1) / 2 - 0.5, (x0 + x1) / 2 + 0.5
     y0, y1 = min(p[1] for p in pts) - 0.15, max(p[1] for p in pts) + 0.15
     s = 400.0  # pixels per metre
     X = lambda p: (p[0] - x0) * s
@@ -44,16 +58,10 @@ def main(model_file, svg_file):
            f'font-family="sans-serif" font-size="13">',
            f'<title>{m.get("name", "model")} at t = 0 (drawn from {model_file})</title>',
            '<rect width="100%" height="100%" fill="white"/>']
-    for name, j in m["joints"].items():  # guide lines first, under the bodies
-        if j["type"] == "translational":
-            g = point(j["guide"], bodies, ground)
-            ax = j.get("axis", [1, 0])
-            n = math.hypot(*ax)
-            a = (g[0] - 0.6 * ax[0] / n, g[1] - 0.6 * ax[1] / n)
-            b = (g[0] + 0.6 * ax[0] / n, g[1] + 0.6 * ax[1] / n)
-            out.append(f'<line x1="{X(a):.1f}" y1="{Y(a):.1f}" x2="{X(b):.1f}" y2="{Y(b):.1f}" '
-                       'stroke="#999" stroke-dasharray="6 4"/>')
-            out.append(f'<text x="{X(b) + 4:.1f}" y="{Y(b) - 4:.1f}" fill="#777">{name}</text>')
+    for name, a, b in guides:  # guide lines first, under the bodies
+        out.append(f'<line x1="{X(a):.1f}" y1="{Y(a):.1f}" x2="{X(b):.1f}" y2="{Y(b):.1f}" '
+                   'stroke="#999" stroke-dasharray="6 4"/>')
+        out.append(f'<text x="{X(b) + 4:.1f}" y="{Y(b) - 4:.1f}" fill="#777">{name}</text>')
     for i, (name, b) in enumerate(bodies.items()):
         ms = [world(name, k, bodies, ground) for k in b.get("markers", {})]
         if len(ms) >= 2:
