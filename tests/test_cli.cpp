@@ -10,6 +10,7 @@
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -105,6 +106,30 @@ TEST(Cli, CheckAcceptsTheExamples) {
   const Result tmd = run_lash("check " + lash::test::example_path("tmd_slider_crank.yaml"));
   EXPECT_NE(tmd.out.find("ok: 4 bodies, 4 joints (1 with clearance), 1 drivers, 1 loads"),
             std::string::npos) << tmd.out;
+}
+
+TEST(Cli, ModesPrintsAFlexibleLinksFrequenciesBesideTheClosedForms) {
+  const Result r =
+      run_lash("modes " + lash::test::example_path("flores_slider_crank_flexible_rod.yaml") +
+               " --count 3");
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("body 'rod': flexible link, 0.12 m, 4 elements"), std::string::npos)
+      << r.out;
+  // The first clamped–free bending mode: 1.8751² √(EI/(ρA L⁴)) = 1154.88 Hz (EI = 1545.6 N·m²,
+  // ρA = 1.75 kg/m, L = 0.12 m); 4 cubic elements are within 1e-4 of it.
+  const size_t at = r.out.find("       1  bending");
+  ASSERT_NE(at, std::string::npos) << r.out;
+  std::istringstream row(r.out.substr(at));
+  int index = 0;
+  std::string kind;
+  double mesh = 0, closed = 0;
+  row >> index >> kind >> mesh >> closed;
+  EXPECT_NEAR(closed, 1154.88, 0.01);
+  EXPECT_NEAR(mesh / closed, 1.0, 1e-4);
+  // A model without flexible links says so.
+  const Result none = run_lash("modes " + example());
+  EXPECT_EQ(none.code, 0);
+  EXPECT_NE(none.out.find("no flexible links"), std::string::npos);
 }
 
 TEST(Cli, CheckListsProblemsWithFileLineColumnAndExitsTwo) {

@@ -34,14 +34,15 @@ DenseSolve dense_solve(const Workspace& ws, double epsilon) {
     phi.row(a) = ws.phi_q.row(active[a]);
     rhs[a] = ws.rhs_m[active[a]];
   }
+  const Eigen::MatrixXd minv = mass_matrix(ws).inverse();
   const Eigen::MatrixXd w =
-      phi * ws.minv.asDiagonal() * phi.transpose() + epsilon * Eigen::MatrixXd::Identity(ma, ma);
-  rhs -= phi * ws.minv.cwiseProduct(ws.g);
+      phi * minv * phi.transpose() + epsilon * Eigen::MatrixXd::Identity(ma, ma);
+  rhs -= phi * minv * ws.g;
   const Eigen::VectorXd la = w.ldlt().solve(rhs);
   DenseSolve d;
   d.lambda = Eigen::VectorXd::Zero(ws.m);
   for (int a = 0; a < ma; ++a) d.lambda[active[a]] = la[a];
-  d.qdd = ws.minv.cwiseProduct(ws.g + phi.transpose() * la);
+  d.qdd = minv * (ws.g + phi.transpose() * la);
   return d;
 }
 
@@ -63,7 +64,7 @@ class Compare : public Observer {
     Eigen::MatrixXd phi(ws.solver->active.size(), ws.nq);
     for (size_t a = 0; a < ws.solver->active.size(); ++a) phi.row(a) = ws.phi_q.row(ws.solver->active[a]);
     const Eigen::VectorXd ev =
-        Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(phi * ws.minv.asDiagonal() * phi.transpose())
+        Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(phi * mass_matrix(ws).inverse() * phi.transpose())
             .eigenvalues();
     const double bound = ws.solver->epsilon / ev[0];
     const double err = (ws.lambda - exact.lambda).norm() / exact.lambda.norm();

@@ -14,6 +14,7 @@
 #include <memory>
 
 #include "cli/sweep.hpp"
+#include "cli/modes.hpp"
 #include "cli/tune_absorber.hpp"
 #include "io/files.hpp"
 #include "io/model_loader.hpp"
@@ -225,6 +226,16 @@ int main(int argc, char** argv) {
   check->add_option("--set", overrides, "Override a model value, KEY.PATH=VALUE, repeatable")
       ->take_all();
 
+  auto* modes = app.add_subcommand(
+      "modes", "Natural frequencies of each flexible link of a model, from its mesh, beside the "
+               "Euler–Bernoulli closed forms (clamped–free and free–free)");
+  int mode_count = 6;
+  modes->add_option("model", model_path, "Model file (YAML)")->required()->check(CLI::ExistingFile);
+  modes->add_option("--count", mode_count, "Elastic modes per support (default 6)")
+      ->check(CLI::Range(1, 100));
+  modes->add_option("--set", overrides, "Override a model value, KEY.PATH=VALUE, repeatable")
+      ->take_all();
+
   const lash::cli::TuneAbsorberCommand tune_absorber(app);
   const lash::cli::SweepCommand sweep(app, argv);
 
@@ -280,6 +291,16 @@ int main(int argc, char** argv) {
     return report_model_error(e);
   }
   const lash::Model& model = loaded.model;
+
+  if (*modes) {
+    try {
+      lash::cli::print_modes(model, mode_count, std::cout);
+    } catch (const std::exception& e) {
+      std::cerr << model_path << ": " << e.what() << "\n";
+      return 2;
+    }
+    return 0;
+  }
 
   if (*check) {
     try {

@@ -134,6 +134,32 @@ Vec8 element_elastic_force(const Section& s, double l, const Vec8& e) {
   return q;
 }
 
+void element_forces(const Section& s, double l, const Vec8& e, const Vec8& e_dot, double eta,
+                    Vec8& force, double& energy, double& dissipation) {
+  const double ea = s.youngs_modulus * s.area, ei = s.youngs_modulus * s.inertia;
+  for (int g = 0; g < kGauss; ++g) {
+    const PointStrain p = point_strain(kGaussX[g], l, e);
+    const double w = kGaussW[g] * l;
+    double n = p.eps, m = p.kappa;
+    energy += w * 0.5 * (ea * p.eps * p.eps + ei * p.kappa * p.kappa);
+    if (eta > 0.0) {
+      const double eps_dot = p.deps.dot(e_dot), kappa_dot = p.dkappa.dot(e_dot);
+      n += eta * eps_dot;
+      m += eta * kappa_dot;
+      dissipation += w * eta * (ea * eps_dot * eps_dot + ei * kappa_dot * kappa_dot);
+    }
+    force -= w * (ea * n * p.deps + ei * m * p.dkappa);
+  }
+}
+
+Vec8 element_gravity(const Section& s, double l, const Vec2& g) {
+  // ∫₀ˡ (s1, s2, s3, s4) dx = (l/2, l²/12, l/2, −l²/12).
+  const double m = s.density * s.area * l;
+  Vec8 q;
+  q << 0.5 * m * g, (m * l / 12.0) * g, 0.5 * m * g, (-m * l / 12.0) * g;
+  return q;
+}
+
 Mat8 element_stiffness(const Section& s, double l, const Vec8& e) {
   Mat8 k = Mat8::Zero();
   const double ea = s.youngs_modulus * s.area, ei = s.youngs_modulus * s.inertia;

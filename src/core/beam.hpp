@@ -62,6 +62,15 @@ Mat8 element_mass(const Section& s, double l);
 double element_strain_energy(const Section& s, double l, const Vec8& e);
 /// Generalised elastic force −∂U/∂e of one element, N (or N·m per unit slope).
 Vec8 element_elastic_force(const Section& s, double l, const Vec8& e);
+/// Internal forces of one element of a Kelvin–Voigt beam at coordinates e and velocities ė:
+/// Q = −∫ [EA (ε + η ε̇) ∂ε/∂e + EI (κ + η κ̇) ∂κ/∂e] dx, added to `force`; its strain energy
+/// (J) and dissipated power ∫ η (EA ε̇² + EI κ̇²) dx (W, ≥ 0) are added to `energy` and
+/// `dissipation`. η = 0: the elastic force alone.
+void element_forces(const Section& s, double l, const Vec8& e, const Vec8& e_dot, double eta,
+                    Vec8& force, double& energy, double& dissipation);
+/// Generalised force of a uniform field of acceleration g (gravity) on one element, ∫ρA Sᵀg dx;
+/// its potential is −Qᵀe (r is linear in e).
+Vec8 element_gravity(const Section& s, double l, const Vec2& g);
 /// Tangent stiffness ∂²U/∂e² of one element (analytic).
 Mat8 element_stiffness(const Section& s, double l, const Vec8& e);
 

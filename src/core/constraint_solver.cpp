@@ -142,9 +142,11 @@ static void build_solver(const Model& model, Workspace& ws, const Eigen::MatrixX
   const int ma = static_cast<int>(s->active.size());
 
   // The regularisation's scale: the largest diagonal entry of W.
+  // (M⁻¹ approximated by the inverse of its diagonal, exact but for flexible links).
   s->scale = 0.0;
+  const Eigen::RowVectorXd diag_inverse = ws.mass_diag.cwiseInverse().transpose();
   for (int a = 0; a < ma; ++a)
-    s->scale = std::max(s->scale, phi_q.row(s->active[a]).cwiseAbs2().dot(ws.minv.transpose()));
+    s->scale = std::max(s->scale, phi_q.row(s->active[a]).cwiseAbs2().dot(diag_inverse));
   if (!(s->scale > 0.0)) s->scale = 1.0;
   s->epsilon = kRegularisation * s->scale;
 
@@ -227,9 +229,12 @@ static void build_solver(const Model& model, Workspace& ws, const Eigen::MatrixX
     for (int a : anchored[b]) s->pos[nq + a] = next++;
   }
 
-  // Pattern of the upper triangle in that order: the diagonal, and Φ_q's blocks.
+  // Pattern of the upper triangle in that order: the diagonal, M's coupling (flexible links),
+  // and Φ_q's blocks.
   std::vector<Eigen::Triplet<double>> t;
   for (int v = 0; v < n; ++v) t.emplace_back(s->pos[v], s->pos[v], 1.0);
+  for (const auto& e : ws.mass_coupling)
+    t.emplace_back(std::min(s->pos[e.i], s->pos[e.j]), std::max(s->pos[e.i], s->pos[e.j]), 0.0);
   for (int a = 0; a < ma; ++a)
     for (int b : ws.row_bodies[s->active[a]]) {
       if (b < 0) continue;
@@ -247,7 +252,8 @@ static void build_solver(const Model& model, Workspace& ws, const Eigen::MatrixX
     return static_cast<int>(&s->k.coeffRef(i, j) - s->k.valuePtr());
   };
   s->k.coeffs().setZero();
-  for (int k = 0; k < nq; ++k) s->k.valuePtr()[slot(k, k)] = 1.0 / ws.minv[k];
+  for (int k = 0; k < nq; ++k) s->k.valuePtr()[slot(k, k)] = ws.mass_diag[k];
+  for (const auto& e : ws.mass_coupling) s->k.valuePtr()[slot(e.i, e.j)] = e.value;
   for (int a = 0; a < ma; ++a) {
     s->slot_reg.push_back(slot(nq + a, nq + a));
     s->phi_begin.push_back(static_cast<int>(s->phi_col.size()));

@@ -1,5 +1,6 @@
 #include "core/dynamics.hpp"
 
+#include <Eigen/Cholesky>
 #include <Eigen/LU>
 #include <Eigen/QR>
 #include <cmath>
@@ -55,6 +56,60 @@ void load_body_state(Workspace& ws) {
   }
 }
 
+/// Size of body b's rigid motion: 3 (x, y, φ) for a rigid body or a flexible link, 2 for a point
+/// mass.
+int rigid_size(const Model& model, int b) { return model.bodies[b].type == BodyType::point_mass ? 2 : 3; }
+
+
+/// The bodies' rigid motions q̇ = T u, u = per body (v_x, v_y[, ω]): the identity for rigid
+/// bodies and point masses; for a flexible link the motion of its current shape as a rigid body
+/// about the middle c of its chord, ṙ_i = v + ω perp(r_i − c), ṙ'_i = ω perp(r'_i).
+Eigen::MatrixXd rigid_motion_basis(const Model& model, const Workspace& ws, const double* y) {
+  int nu = 0;
+  for (int b = 0; b < ws.nb; ++b) nu += rigid_size(model, b);
+  Eigen::MatrixXd t = Eigen::MatrixXd::Zero(ws.nq, nu);
+  int u = 0;
+  for (int b = 0; b < ws.nb; ++b) {
+    const BodyBlock& bl = ws.blocks[b];
+    if (!model.bodies[b].flexible()) {
+      t.block(bl.offset, u, bl.size, bl.size).setIdentity();
+      u += bl.size;
+      continue;
+    }
+    const Vec2 c = body_kin(ws, b, y).r;
+    for (int i = 0; i < bl.size; i += beam::kNodeCoordinates) {
+      const Vec2 r(y[bl.offset + i], y[bl.offset + i + 1]), s(y[bl.offset + i + 2], y[bl.offset + i + 3]);
+      t.block<2, 2>(bl.offset + i, u).setIdentity();
+      t.block<2, 1>(bl.offset + i, u + 2) = perp(Vec2(r - c));
+      t.block<2, 1>(bl.offset + i + 2, u + 2) = perp(s);
+    }
+    u += 3;
+  }
+  return t;
+}
+
+/// Moves every body rigidly by du (the coordinates of rigid_motion_basis): a flexible link
+/// turns by an exact rotation about the middle of its chord, so its strain does not change.
+void move_rigidly(const Model& model, const Workspace& ws, Eigen::VectorXd& y, const Eigen::VectorXd& du) {
+  int u = 0;
+  for (int b = 0; b < ws.nb; ++b) {
+    const BodyBlock& bl = ws.blocks[b];
+    if (!model.bodies[b].flexible()) {
+      y.segment(bl.offset, bl.size) += du.segment(u, bl.size);
+      u += bl.size;
+      continue;
+    }
+    const Vec2 c = body_kin(ws, b, y.data()).r, d = du.segment<2>(u);
+    const Eigen::Matrix2d rot = rotation(du[u + 2]);
+    for (int i = 0; i < bl.size; i += beam::kNodeCoordinates) {
+      const Vec2 r = y.segment<2>(bl.offset + i);
+      y.segment<2>(bl.offset + i) = c + d + rot * (r - c);
+      y.segment<2>(bl.offset + i + 2) = rot * Vec2(y.segment<2>(bl.offset + i + 2));
+    }
+    u += 3;
+  }
+}
+
 }  // namespace
 
 int Model::clearance_joint_count() const {
@@ -63,9 +118,24 @@ int Model::clearance_joint_count() const {
   return n;
 }
 
-/// Pose and velocity of a body from y into k (whose block is set).
+/// Pose and velocity of a body from y into k (whose block, and mesh for a flexible link, are set).
 inline void read_kin(BodyKin& k, int nq, const double* y) {
   const BodyBlock& bl = k.block;
+  if (k.mesh) {
+    // A flexible link: the chord from end A (node 0) to end B (the last node).
+    k.q = y + bl.offset;
+    k.qd = y + nq + bl.offset;
+    const int b = bl.size - beam::kNodeCoordinates;
+    const Vec2 ra(k.q[0], k.q[1]), rb(k.q[b], k.q[b + 1]);
+    const Vec2 va(k.qd[0], k.qd[1]), vb(k.qd[b], k.qd[b + 1]);
+    const Vec2 d = rb - ra;
+    k.r = 0.5 * (ra + rb);
+    k.v = 0.5 * (va + vb);
+    k.phi = std::atan2(d.y(), d.x());
+    k.omega = cross(d, Vec2(vb - va)) / d.squaredNorm();
+    k.A = rotation(k.phi);
+    return;
+  }
   k.r = Vec2(y[bl.offset], y[bl.offset + 1]);
   k.v = Vec2(y[nq + bl.offset], y[nq + bl.offset + 1]);
   if (bl.rot >= 0) {
@@ -79,8 +149,15 @@ BodyKin body_kin(const Workspace& ws, int b, const double* y) {
   BodyKin k;
   if (b == kGround) return k;
   k.block = ws.blocks[b];
+  k.mesh = ws.kin[b].mesh;
   read_kin(k, ws.nq, y);
   return k;
+}
+
+Eigen::MatrixXd mass_matrix(const Workspace& ws) {
+  Eigen::MatrixXd m = ws.mass_diag.asDiagonal();
+  for (const auto& e : ws.mass_coupling) m(e.i, e.j) = m(e.j, e.i) = e.value;
+  return m;
 }
 
 std::vector<std::string> state_names(const Model& model, const Workspace& ws) {
@@ -88,6 +165,16 @@ std::vector<std::string> state_names(const Model& model, const Workspace& ws) {
   for (int b = 0; b < ws.nb; ++b) {
     const BodyBlock& bl = ws.blocks[b];
     const std::string& name = model.bodies[b].name;
+    if (model.bodies[b].flexible()) {
+      const char* q[4] = {".x", ".y", ".sx", ".sy"};  // position and slope r' of each node
+      const char* v[4] = {".vx", ".vy", ".vsx", ".vsy"};
+      for (int i = 0; i < bl.size; ++i) {
+        const std::string node = name + ".n" + std::to_string(i / beam::kNodeCoordinates);
+        n[bl.offset + i] = node + q[i % 4];
+        n[ws.nq + bl.offset + i] = node + v[i % 4];
+      }
+      continue;
+    }
     const char* q[3] = {".x", ".y", ".phi"};
     const char* v[3] = {".vx", ".vy", ".omega"};
     for (int i = 0; i < bl.size; ++i) {
@@ -115,7 +202,7 @@ Workspace::Workspace(const Model& model) {
   for (const Body& b : model.bodies) {
     BodyBlock bl;
     bl.offset = nq;
-    bl.size = kind_of(b).coordinates;
+    bl.size = kind_of(b).coordinates(b);
     bl.rot = b.rotates() ? nq + 2 : -1;
     nq += bl.size;
     blocks.push_back(bl);
@@ -141,7 +228,12 @@ Workspace::Workspace(const Model& model) {
       row_bodies.push_back({model.joints[d.joint].a.body, model.joints[d.joint].b.body});
   }
   kin.assign(nb, BodyKin{});
-  for (int b = 0; b < nb; ++b) kin[b].block = blocks[b];
+  meshes.resize(nb);
+  for (int b = 0; b < nb; ++b) {
+    kin[b].block = blocks[b];
+    meshes[b] = model.bodies[b].mesh;
+    if (model.bodies[b].flexible()) kin[b].mesh = &meshes[b];
+  }
   // Auxiliary states: the clearance joints', then the speed-profile drivers' positions.
   nc = static_cast<int>(clearance_joints.size());
   contact.assign(nc, ContactState{});
@@ -186,9 +278,17 @@ Workspace::Workspace(const Model& model) {
   }
   load_out.assign(model.loads.size(), LoadOutput{});
 
-  minv.resize(nq);
-  for (int b = 0; b < nb; ++b)
-    kind_of(model.bodies[b]).mass_inverse(model.bodies[b], minv.data() + blocks[b].offset);
+  mass_diag.resize(nq);
+  for (int b = 0; b < nb; ++b) {
+    const BodyBlock& bl = blocks[b];
+    Eigen::MatrixXd mb = Eigen::MatrixXd::Zero(bl.size, bl.size);
+    kind_of(model.bodies[b]).mass(model.bodies[b], mb);
+    for (int i = 0; i < bl.size; ++i) {
+      mass_diag[bl.offset + i] = mb(i, i);
+      for (int j = i + 1; j < bl.size; ++j)
+        if (mb(i, j) != 0.0) mass_coupling.push_back({bl.offset + i, bl.offset + j, mb(i, j)});
+    }
+  }
   g.resize(nq);
   qdd = Eigen::VectorXd::Zero(nq);
   phi.resize(m);
@@ -220,10 +320,9 @@ bool evaluate(const Model& model, Workspace& ws, double t, const double* y, doub
   ws.kinetic = ws.potential = ws.dissipated_power = ws.input_power = 0.0;
   for (int b = 0; b < ws.nb; ++b) {
     const Body& body = model.bodies[b];
-    const BodyKin& k = ws.kin[b];
-    ws.g.segment<2>(k.block.offset) += body.mass * model.gravity;
-    ws.potential -= body.mass * model.gravity.dot(k.r);
-    ws.kinetic += kind_of(body).kinetic_energy(body, k);
+    const BodyKind& kind = kind_of(body);
+    kind.forces(model, body, ws.kin[b], ws);
+    ws.kinetic += kind.kinetic_energy(body, ws.kin[b]);
   }
   for (size_t li = 0; li < model.loads.size(); ++li) {
     const Load& l = model.loads[li];
@@ -263,7 +362,14 @@ bool evaluate(const Model& model, Workspace& ws, double t, const double* y, doub
     ws.stabilization_power = ws.lambda.dot(ws.phi_dot);
     ws.constraint_violation = ws.phi.cwiseAbs().maxCoeff();
   } else {
-    ws.qdd = ws.minv.cwiseProduct(ws.g);
+    // No constraints: M q̈ = g, block by block (a flexible link's block through its Cholesky
+    // factor, computed once).
+    if (ws.mass_coupling.empty()) {
+      ws.qdd = ws.g.cwiseQuotient(ws.mass_diag);
+    } else {
+      if (!ws.mass_factor) ws.mass_factor = std::make_unique<Eigen::LLT<Eigen::MatrixXd>>(mass_matrix(ws));
+      ws.qdd = ws.mass_factor->solve(ws.g);
+    }
     ws.constraint_violation = 0.0;
   }
 
@@ -346,26 +452,23 @@ Eigen::VectorXd initial_state(const Model& model, Workspace& ws) {
   for (int b = 0; b < ws.nb; ++b) {
     const Body& body = model.bodies[b];
     const BodyBlock& bl = ws.blocks[b];
-    y.segment<2>(bl.offset) = body.r0;
-    if (bl.rot >= 0) y[bl.rot] = body.phi0;
-    if (!ideal) {
-      y.segment<2>(nq + bl.offset) = body.v0;
-      if (bl.rot >= 0) y[nq + bl.rot] = body.omega0;
-    }
+    kind_of(body).initial(body, y.data() + bl.offset, ideal ? nullptr : y.data() + nq + bl.offset);
   }
   if (rows == 0) return y;
   Eigen::VectorXd phi(rows), phi_dot(rows);
   Eigen::MatrixXd phi_q(rows, nq);
 
-  // Positions: Gauss–Newton with minimum-norm corrections.
+  // Positions: Gauss–Newton with minimum-norm corrections, each body moved as a rigid body (a
+  // flexible link keeps its shape: assembly does not strain it).
   double residual = 0.0;
   for (int it = 0; it < 100; ++it) {
     update_kin(ws, y.data());
     build_constraints(model, ws, 0.0, y.data(), ideal, phi, phi_q, nullptr, nullptr);
     residual = phi.cwiseAbs().maxCoeff();
     if (residual < 1e-13) break;
-    Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(phi_q);
-    y.head(nq) -= cod.solve(phi);
+    Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(phi_q *
+                                                                rigid_motion_basis(model, ws, y.data()));
+    move_rigidly(model, ws, y, -cod.solve(phi));
   }
   if (!(residual < 1e-10))
     throw std::runtime_error("initial assembly failed: the joints and drivers cannot all be "
@@ -374,15 +477,19 @@ Eigen::VectorXd initial_state(const Model& model, Workspace& ws) {
                              "); check the markers and initial positions");
 
   // Velocities: Φ_q q̇ = −Φ_t by the correction of the initial guess with the least kinetic
-  // energy, Δ = M^{-1/2} (Φ_q M^{-1/2})⁺ Φ̇ (Gauss's principle): from rest (`ideal`) that is the
+  // energy, Δ = L⁻ᵀ (Φ_q L⁻ᵀ)⁺ Φ̇ with M = L Lᵀ (Gauss's principle): from rest (`ideal`) that is the
   // motion a drive started impulsively gives — a body no driver moves stays at rest, and a driver
   // between two otherwise free bodies splits its motion so that their momentum is conserved.
   // Unlike a Euclidean minimum norm it does not depend on the units of the coordinates.
+  // The correction is a rigid motion of each body, q̇ = T u (a flexible link starts without
+  // strain rates, which would ring through the run), so M and Φ_q are those of u: TᵀMT, Φ_q T.
   update_kin(ws, y.data());
   build_constraints(model, ws, 0.0, y.data(), ideal, phi, phi_q, &phi_dot, nullptr);
-  const Eigen::VectorXd root_minv = ws.minv.cwiseSqrt();
-  Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(phi_q * root_minv.asDiagonal());
-  y.segment(nq, nq) -= root_minv.cwiseProduct(cod.solve(phi_dot));
+  const Eigen::MatrixXd t = rigid_motion_basis(model, ws, y.data());
+  const Eigen::LLT<Eigen::MatrixXd> chol(t.transpose() * mass_matrix(ws) * t);
+  const Eigen::MatrixXd scaled = chol.matrixU().solve<Eigen::OnTheRight>(Eigen::MatrixXd(phi_q * t));
+  Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(scaled);
+  y.segment(nq, nq) -= t * chol.matrixU().solve(cod.solve(phi_dot));
 
   if (const std::string why = constraint_problem(model, ws, 0.0, y, false); !why.empty())
     throw std::runtime_error(why);

@@ -7,6 +7,7 @@
 /// augmented system of core/constraint_solver.hpp. Every element kind lives in
 /// core/elements/ and is listed in core/elements/registry.hpp. The ODE state is
 ///   y = [q (nq), q̇ (nq), auxiliary states (na), E_dissipated, W_input, W_stabilization].
+#include <Eigen/Cholesky>
 #include <Eigen/Core>
 #include <array>
 #include <memory>
@@ -83,9 +84,22 @@ struct Workspace {
   std::vector<std::vector<Expression>> load_expr;   ///< per load: fx, fy or torque
   bool loads_use_state = false;
 
+  /// The constant mass matrix M: its diagonal, and the entries above it (within a flexible
+  /// link's block; rigid bodies and point masses have diagonal blocks).
+  struct MassEntry {
+    int i, j;
+    double value;
+  };
+  Eigen::VectorXd mass_diag;
+  std::vector<MassEntry> mass_coupling;
+  /// Flexible links' meshes, per body (the BodyKin of a flexible link points here).
+  std::vector<beam::Mesh> meshes;
+  /// Cholesky factor of M where it is not diagonal and there are no constraints (set lazily).
+  std::unique_ptr<Eigen::LLT<Eigen::MatrixXd>> mass_factor;
+
   // Work arrays (sized once). g: applied generalised forces (no constraint forces); rhs_m: the
   // stabilised constraint accelerations γ_B = γ − 2αΦ̇ − β²Φ; rate_m: Φ_q q̇.
-  Eigen::VectorXd minv, g, phi, phi_dot, gamma, rhs_m, rate_m, lambda, qdd;
+  Eigen::VectorXd g, phi, phi_dot, gamma, rhs_m, rate_m, lambda, qdd;
   Eigen::MatrixXd phi_q;
   /// The sparse constraint solver, set up at assembly (initial_state, constraint_problem) or at
   /// the first evaluation; redundant rows are dropped there and named in `warnings`.
@@ -108,6 +122,9 @@ struct Workspace {
     return b == kGround ? ground : kin[b];
   }
 };
+
+/// The mass matrix M (nq × nq), dense.
+Eigen::MatrixXd mass_matrix(const Workspace& ws);
 
 /// Kinematics of body b read directly from y (the ground for kGround).
 BodyKin body_kin(const Workspace& ws, int b, const double* y);

@@ -32,7 +32,7 @@ class Checker {
 
   void run() {
     names();
-    for (const Body& b : m_.bodies) body(b);
+    for (Body& b : m_.bodies) body(b);
     for (Joint& j : m_.joints) joint(j);
     for (Driver& d : m_.drivers) driver(d);
     for (Load& l : m_.loads) load(l);
@@ -45,6 +45,12 @@ class Checker {
   void error(const std::string& element, const std::string& msg) { p_.push_back({element, msg}); }
   bool valid_body(int b) const { return b == kGround || (b >= 0 && b < int(m_.bodies.size())); }
   bool rotates(int b) const { return b == kGround || m_.bodies[b].rotates(); }
+  bool flexible(int b) const { return b != kGround && m_.bodies[b].flexible(); }
+  /// The element kinds a flexible link takes, for messages.
+  static constexpr const char* kOnFlexible =
+      "a flexible link takes revolute joints (with or without clearance), distance joints, "
+      "forces, spring-dampers and sensors with axes in the ground's frame; pin a short rigid "
+      "body to it for the rest";
   std::string body_name(int b) const { return b == kGround ? "ground" : m_.bodies[b].name; }
 
   void names() {
@@ -74,8 +80,9 @@ class Checker {
     check("sensor", m_.sensors);
   }
 
-  void body(const Body& b) {
+  void body(Body& b) {
     const std::string el = "body '" + b.name + "'";
+    if (b.flexible()) return flexible_body(b, el);
     if (!(b.mass > 0 && std::isfinite(b.mass))) error(el, "mass must be > 0 kg");
     if (b.rotates() && !(b.inertia > 0 && std::isfinite(b.inertia)))
       error(el, "inertia must be > 0 kg·m² (leave it out for a point mass)");
@@ -90,10 +97,46 @@ class Checker {
     }
   }
 
+  void flexible_body(Body& b, const std::string& el) {
+    const beam::Mesh& m = b.mesh;
+    const beam::Section& s = m.section;
+    auto positive = [](double v) { return v > 0 && std::isfinite(v); };
+    if (!positive(m.length)) error(el, "length must be > 0 m");
+    if (m.elements < 1 || m.elements > 1000) error(el, "elements must be 1 … 1000");
+    if (!positive(s.youngs_modulus)) error(el, "youngs_modulus must be > 0 Pa");
+    if (!positive(s.area) || !positive(s.inertia))
+      error(el, "the section's area and second moment of area must be > 0");
+    if (!(s.fibre >= 0 && std::isfinite(s.fibre))) error(el, "fibre distance must be >= 0 m");
+    if (!(b.structural_damping >= 0 && std::isfinite(b.structural_damping)))
+      error(el, "damping (retardation time) must be >= 0 s");
+    // Mass and density: one follows from the other; both given must agree.
+    if (!positive(s.density) && positive(b.mass) && positive(m.length) && positive(s.area))
+      b.mesh.section.density = b.mass / (s.area * m.length);
+    const double from_section = b.mesh.section.density * s.area * m.length;
+    if (!positive(from_section)) return error(el, "give the density or the mass");
+    if (b.mass == 0.0) b.mass = from_section;
+    if (std::abs(b.mass - from_section) > 1e-6 * from_section)
+      error(el, "mass " + std::to_string(b.mass) + " kg differs from density × area × length = " +
+                    std::to_string(from_section) + " kg; give one of them");
+    b.inertia = b.mass * m.length * m.length / 12.0;  // of the undeformed link, for reports
+    for (const Marker& mk : b.markers)
+      if (std::abs(mk.s_P_B.y()) > 1e-12 * m.length ||
+          std::abs(mk.s_P_B.x()) > 0.5 * m.length * (1 + 1e-12))
+        error(el, "marker '" + mk.name + "' at [" + std::to_string(mk.s_P_B.x()) + ", " +
+                      std::to_string(mk.s_P_B.y()) +
+                      "] is off the link's axis: markers of a flexible link lie at [x, 0] with "
+                      "|x| <= length/2 = " + std::to_string(0.5 * m.length) + " m");
+  }
+
   void joint(Joint& j) {
     const std::string el = "joint '" + j.name + "'";
     if (!valid_body(j.a.body) || !valid_body(j.b.body)) return error(el, "body out of range");
     if (j.a.body == j.b.body) error(el, "joins body '" + body_name(j.a.body) + "' to itself");
+    if ((flexible(j.a.body) || flexible(j.b.body)) &&
+        (j.type == JointType::translational || j.type == JointType::fixed))
+      return error(el, std::string("a ") +
+                           (j.type == JointType::fixed ? "fixed" : "translational") +
+                           " joint needs the axes of a rigid body; " + kOnFlexible);
     if (j.clearance) {
       Clearance& c = *j.clearance;
       if (j.type != JointType::revolute) error(el, "only a revolute joint can have clearance");
@@ -134,6 +177,9 @@ class Checker {
     if (d.target == DriverTarget::body) {
       if (d.body < 0 || d.body >= int(m_.bodies.size())) return error(el, "body out of range");
       const Body& b = m_.bodies[d.body];
+      if (b.flexible())
+        return error(el, "body '" + b.name + "' is a flexible link, which has no single "
+                         "coordinate to drive; drive a joint or a rigid body");
       if (d.coordinate == BodyCoordinate::phi && !b.rotates())
         return error(el, "body '" + b.name + "' is a point mass: it has no angle to drive");
       if (std::isnan(d.initial))
@@ -149,6 +195,9 @@ class Checker {
                                           : "not revolute or translational") +
                              "; drive an ideal revolute or translational joint, or drive the "
                              "body itself (body: NAME, coordinate: phi)");
+      if (j.type == JointType::revolute && (flexible(j.a.body) || flexible(j.b.body)))
+        return error(el, "joint '" + j.name + "' holds a flexible link; drive the joint at the "
+                         "link's other end or a rigid body (body: NAME, coordinate: phi)");
       if (j.type == JointType::revolute && (!rotates(j.a.body) || !rotates(j.b.body)))
         return error(el, "joint '" + j.name + "' holds a point mass, which has no angle to drive");
       if (std::isnan(d.initial)) {
@@ -166,6 +215,16 @@ class Checker {
 
   void load(Load& l) {
     const std::string el = "load '" + l.name + "'";
+    const bool on_flexible =
+        l.type == LoadType::torque ? valid_body(l.body_a) && flexible(l.body_a)
+        : l.type == LoadType::torsional_spring_damper
+            ? (valid_body(l.body_a) && flexible(l.body_a)) || (valid_body(l.body_b) && flexible(l.body_b))
+        : l.type == LoadType::bushing
+            ? (valid_body(l.a.body) && flexible(l.a.body)) || (valid_body(l.b.body) && flexible(l.b.body))
+            : false;
+    if (on_flexible)
+      return error(el, std::string("a ") + kind_of(l).name + " load needs a rigid body's angle or "
+                       "axes; " + kOnFlexible);
     switch (l.type) {
       case LoadType::force:
         if (!valid_body(l.a.body)) error(el, "body out of range");
@@ -221,6 +280,9 @@ class Checker {
     if (!(n > 0) || !std::isfinite(n)) error(el, "axis must be a non-zero vector");
     else s.axis /= n;
     if (s.mass < 0 || !std::isfinite(s.mass)) error(el, "mass must be >= 0 kg");
+    if (valid_body(s.at.body) && flexible(s.at.body) && s.body_axis)
+      error(el, "body '" + body_name(s.at.body) + "' is a flexible link, which has no body "
+                "axes: give its axis in the ground's frame (frame: ground)");
   }
 
   void mount_sensor_masses() {

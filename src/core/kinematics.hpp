@@ -2,9 +2,13 @@
 /// @file kinematics.hpp
 /// Coordinate blocks and the kinematics every element reads. A body owns one block of the
 /// coordinate vector q: its address (offset) and size are the only things the rest of the
-/// engine knows about it. Rigid bodies have [x, y, φ], point masses [x, y]; the ground has none.
+/// engine knows about it. Rigid bodies have [x, y, φ], point masses [x, y], flexible links
+/// [rx, ry, r'x, r'y] per node; the ground has none.
 #include <Eigen/Core>
+#include <algorithm>
+#include <cmath>
 
+#include "core/beam.hpp"
 #include "core/math.hpp"
 
 namespace lash {
@@ -27,45 +31,148 @@ inline void for_block(const BodyBlock& bl, F&& f) {
   }
 }
 
-/// Pose and velocity of one body at the current evaluation (the ground: all zero, A = I).
+/// Pose and velocity of one body at the current evaluation (the ground: all zero, A = I). For a
+/// flexible link, r, v, φ, ω are those of the chord from end A to end B (origin at its middle)
+/// and `mesh`, `q`, `qd` give its nodal coordinates and velocities (core/beam.hpp).
 struct BodyKin {
   Vec2 r = Vec2::Zero(), v = Vec2::Zero();
   double phi = 0.0, omega = 0.0;
   Eigen::Matrix2d A = Eigen::Matrix2d::Identity();
   BodyBlock block;  ///< offset −1 for the ground
+  const beam::Mesh* mesh = nullptr;  ///< flexible link only
+  const double* q = nullptr;         ///< flexible link: its block of q
+  const double* qd = nullptr;        ///< flexible link: its block of q̇
 };
 
-/// A point of a body: world offset s from the body's origin, position and velocity.
+/// A material point of a body at the current evaluation: position r, velocity v, the rotation
+/// rate ω of the material there, the velocity-dependent part of its acceleration
+/// (a_P = J_P q̈ + a_vel), and what its Jacobian J_P = ∂r_P/∂q needs:
+///   rigid body  r_P = r + A s_B:  J_P = [I, perp(s)] on (x, y, φ),  a_vel = −ω² s;
+///   point mass  r_P = r:          J_P = I on (x, y),               a_vel = 0;
+///   flexible    r_P = S(ξ) e:     J_P = S(ξ) on its element's 8,   a_vel = 0
+/// (s = A s_B is the world offset from the body's origin).
 struct PointKin {
-  Vec2 s, r, v;
+  Vec2 s = Vec2::Zero(), r = Vec2::Zero(), v = Vec2::Zero(), a_vel = Vec2::Zero();
+  double omega = 0.0;
+  int offset = -1;   ///< first coordinate of J_P's columns (−1: the ground)
+  int rot = -1;      ///< rigid body: index of φ
+  bool beam = false;
+  double n[4] = {0, 0, 0, 0};   ///< flexible: shape functions s1…s4 at ξ
+  double dn[4] = {0, 0, 0, 0};  ///< flexible: their x-derivatives
+  Vec2 slope = Vec2::UnitX();   ///< flexible: r' at the point
 };
 
+/// The kinematics of the point at body coordinates s_body (on a flexible link's axis, s_body.x
+/// from its middle).
 inline PointKin point_kin(const BodyKin& k, const Vec2& s_body) {
   PointKin p;
-  p.s = k.A * s_body;
-  p.r = k.r + p.s;
-  p.v = k.v + k.omega * perp(p.s);
+  p.offset = k.block.offset;
+  p.rot = k.block.rot;
+  if (!k.mesh) {
+    p.s = k.A * s_body;
+    p.r = k.r + p.s;
+    p.v = k.v + k.omega * perp(p.s);
+    p.omega = k.omega;
+    p.a_vel = -k.omega * k.omega * p.s;
+    return p;
+  }
+  const beam::Mesh& m = *k.mesh;
+  const double l = m.element_length(), x = 0.5 * m.length + s_body.x();
+  const int el = std::clamp(static_cast<int>(std::floor(x / l)), 0, m.elements - 1);
+  const double xi = x / l - el, x2 = xi * xi, x3 = x2 * xi;
+  p.beam = true;
+  p.offset = k.block.offset + beam::kNodeCoordinates * el;
+  p.n[0] = 1 - 3 * x2 + 2 * x3, p.n[1] = l * (xi - 2 * x2 + x3);
+  p.n[2] = 3 * x2 - 2 * x3, p.n[3] = l * (x3 - x2);
+  p.dn[0] = (-6 * xi + 6 * x2) / l, p.dn[1] = 1 - 4 * xi + 3 * x2;
+  p.dn[2] = (6 * xi - 6 * x2) / l, p.dn[3] = 3 * x2 - 2 * xi;
+  const double* q = k.q + beam::kNodeCoordinates * el;
+  const double* qd = k.qd + beam::kNodeCoordinates * el;
+  p.r = p.v = p.slope = Vec2::Zero();
+  Vec2 slope_rate = Vec2::Zero();
+  for (int i = 0; i < 4; ++i) {
+    p.r += p.n[i] * Vec2(q[2 * i], q[2 * i + 1]);
+    p.v += p.n[i] * Vec2(qd[2 * i], qd[2 * i + 1]);
+    p.slope += p.dn[i] * Vec2(q[2 * i], q[2 * i + 1]);
+    slope_rate += p.dn[i] * Vec2(qd[2 * i], qd[2 * i + 1]);
+  }
+  p.s = p.r - k.r;
+  p.omega = cross(p.slope, slope_rate) / p.slope.squaredNorm();
   return p;
 }
 
-/// Adds the generalised force of a world force f applied at world offset s from the body's
-/// origin to g. Returns its power f·v_P.
-inline double apply_force(Eigen::VectorXd& g, const BodyKin& k, const Vec2& s, const Vec2& f) {
-  if (k.block.offset < 0) return 0.0;
-  g[k.block.offset] += f.x();
-  g[k.block.offset + 1] += f.y();
-  if (k.block.rot >= 0) g[k.block.rot] += cross(s, f);
-  return f.dot(k.v + k.omega * perp(s));
+/// Adds dᵀ J_P (the derivative of a row that depends on the point's position through d = ∂Φ/∂r_P)
+/// to row `row` of Φ_q.
+inline void put_point_row(Eigen::MatrixXd& phi_q, int row, const PointKin& p, const Vec2& d) {
+  if (p.offset < 0) return;
+  if (p.beam) {
+    for (int i = 0; i < 4; ++i) {
+      phi_q(row, p.offset + 2 * i) += p.n[i] * d.x();
+      phi_q(row, p.offset + 2 * i + 1) += p.n[i] * d.y();
+    }
+    return;
+  }
+  phi_q(row, p.offset) += d.x();
+  phi_q(row, p.offset + 1) += d.y();
+  if (p.rot >= 0) phi_q(row, p.rot) += d.dot(perp(p.s));
 }
 
-/// Adds a torque τ on a rotating body to g. Returns its power τω.
+/// Acceleration of the point from q̈: J_P q̈ + a_vel.
+inline Vec2 point_acceleration(const PointKin& p, const Eigen::VectorXd& qdd) {
+  if (p.offset < 0) return Vec2::Zero();
+  Vec2 a = p.a_vel;
+  if (p.beam) {
+    for (int i = 0; i < 4; ++i) a += p.n[i] * Vec2(qdd[p.offset + 2 * i], qdd[p.offset + 2 * i + 1]);
+    return a;
+  }
+  a += Vec2(qdd[p.offset], qdd[p.offset + 1]);
+  if (p.rot >= 0) a += qdd[p.rot] * perp(p.s);
+  return a;
+}
+
+/// Adds the generalised force J_Pᵀ f of a world force f at the point to g. Returns its power f·v_P.
+inline double apply_force(Eigen::VectorXd& g, const PointKin& p, const Vec2& f) {
+  if (p.offset < 0) return 0.0;
+  if (p.beam) {
+    for (int i = 0; i < 4; ++i) {
+      g[p.offset + 2 * i] += p.n[i] * f.x();
+      g[p.offset + 2 * i + 1] += p.n[i] * f.y();
+    }
+  } else {
+    g[p.offset] += f.x();
+    g[p.offset + 1] += f.y();
+    if (p.rot >= 0) g[p.rot] += cross(p.s, f);
+  }
+  return f.dot(p.v);
+}
+
+/// Adds a torque τ on the material at the point (a rigid body: on the body; a flexible link: on
+/// the rotation of its axis there, θ = atan2(r'_y, r'_x), ∂θ/∂e = perp(r')ᵀ S' / |r'|²) to g.
+/// Returns its power τω. A point mass takes no torque (returns 0).
+inline double apply_point_torque(Eigen::VectorXd& g, const PointKin& p, double tau) {
+  if (p.offset < 0) return 0.0;
+  if (p.beam) {
+    const Vec2 w = perp(p.slope) * (tau / p.slope.squaredNorm());
+    for (int i = 0; i < 4; ++i) {
+      g[p.offset + 2 * i] += p.dn[i] * w.x();
+      g[p.offset + 2 * i + 1] += p.dn[i] * w.y();
+    }
+  } else if (p.rot >= 0) {
+    g[p.rot] += tau;
+  } else {
+    return 0.0;
+  }
+  return tau * p.omega;
+}
+
+/// Adds a torque τ on a rigid body to g. Returns its power τω.
 inline double apply_torque(Eigen::VectorXd& g, const BodyKin& k, double tau) {
   if (k.block.rot < 0) return 0.0;
   g[k.block.rot] += tau;
   return tau * k.omega;
 }
 
-/// Adds a body's entries to one row of Φ_q: ∂Φ/∂(x, y) = (dx, dy) and ∂Φ/∂φ = dphi.
+/// Adds a rigid body's entries to one row of Φ_q: ∂Φ/∂(x, y) = (dx, dy) and ∂Φ/∂φ = dphi.
 inline void put_row(Eigen::MatrixXd& phi_q, int row, const BodyKin& k, double dx, double dy,
                     double dphi) {
   if (k.block.offset < 0) return;

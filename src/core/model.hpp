@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "core/beam.hpp"
 #include "core/contact_laws.hpp"
 #include "core/friction_laws.hpp"
 #include "core/math.hpp"
@@ -24,12 +25,16 @@ struct Marker {
   Vec2 s_P_B = Vec2::Zero();
 };
 
-/// Body kinds (core/elements/rigid_body.cpp, point_mass.cpp): a rigid body has coordinates
-/// [x, y, φ] and a diagonal mass block (m, m, I); a point mass has [x, y] and (m, m).
-enum class BodyType { rigid, point_mass };
+/// Body kinds (core/elements/rigid_body.cpp, point_mass.cpp, flexible_link.cpp): a rigid body
+/// has coordinates [x, y, φ] and a diagonal mass block (m, m, I); a point mass has [x, y] and
+/// (m, m); a flexible link is a planar ANCF beam (core/beam.hpp) with 4 coordinates per node
+/// [rx, ry, r'x, r'y] and its constant, banded mass matrix.
+enum class BodyType { rigid, point_mass, flexible };
 
 /// A body. A rigid body's frame has its origin at the centre of mass; a point mass has no
-/// orientation (its markers all lie at its position).
+/// orientation (its markers all lie at its position). A flexible link's frame is that of its
+/// undeformed state: origin at the middle of its axis, x along the axis from end A to end B;
+/// its markers lie on the axis (y = 0, |x| ≤ length/2) and move with the deformed beam.
 struct Body {
   std::string name;
   BodyType type = BodyType::rigid;
@@ -40,7 +45,11 @@ struct Body {
   Vec2 v0 = Vec2::Zero();              ///< initial velocity (initial_state: given), m/s
   double omega0 = 0.0;                 ///< initial angular velocity (initial_state: given), rad/s
   std::vector<Marker> markers;
+  beam::Mesh mesh;                     ///< flexible only: length, elements, section, material
+  /// Flexible only: Kelvin–Voigt retardation time η (s): stresses E(ε + η ε̇), E I(κ + η κ̇).
+  double structural_damping = 0.0;
   bool rotates() const { return type == BodyType::rigid; }
+  bool flexible() const { return type == BodyType::flexible; }
 };
 
 /// A point on a body (or on the ground, in world coordinates).

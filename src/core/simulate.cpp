@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "core/elements/clearance_revolute.hpp"
+#include "core/elements/registry.hpp"
 
 namespace lash {
 
@@ -239,6 +240,10 @@ SectionPlane parse_section_plane(const Model& model, const std::string& spec) {
   int f = -1;
   for (int i = 0; i < 6; ++i)
     if (field == fields[i]) f = i;
+  if (b >= 0 && model.bodies[b].flexible())
+    throw std::invalid_argument("section plane '" + spec + "': body '" + body +
+                                "' is a flexible link; put the plane on a rigid body or a "
+                                "point mass");
   if (b >= 0 && !model.bodies[b].rotates() && (f == 2 || f == 5))
     throw std::invalid_argument("section plane '" + spec + "': body '" + body +
                                 "' is a point mass, which has no angle");
@@ -256,7 +261,7 @@ SectionPlane parse_section_plane(const Model& model, const std::string& spec) {
   // Indices into y follow the coordinate blocks (rigid: x, y, φ; point mass: x, y).
   int offset = 0, nq = 0;
   for (size_t i = 0; i < model.bodies.size(); ++i) {
-    const int size = model.bodies[i].rotates() ? 3 : 2;
+    const int size = kind_of(model.bodies[i]).coordinates(model.bodies[i]);
     if (static_cast<int>(i) == b) offset = nq;
     nq += size;
   }

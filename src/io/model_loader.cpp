@@ -315,7 +315,7 @@ class Loader {
       const std::string name = kv.first.as<std::string>("");
       Section s(r_, kv.second, kv.first, "body '" + name + "'",
                 {"mass", "inertia", "position", "angle", "angle_deg", "velocity",
-                 "angular_velocity", "markers"});
+                 "angular_velocity", "markers", "flexible"});
       if (name == "ground") r_.error(kv.first, s.element(), "'ground' is reserved; rename the body");
       if (!std::regex_match(name, std::regex("[A-Za-z_][A-Za-z0-9_]*")))
         r_.error(kv.first, s.element(),
@@ -323,9 +323,15 @@ class Loader {
                  "(it is used in expressions as <body>.x), got '" + name + "'");
       Body b;
       b.name = name;
-      b.mass = s.required_number("mass", " (kg)", positive, 1.0);
+      if (!s.has("flexible")) b.mass = s.required_number("mass", " (kg)", positive, 1.0);
       nodes_["body '" + name + "'"] = kv.second;
-      if (s.has("inertia")) {
+      if (s.has("flexible")) {
+        // A flexible link: `mass` may be left out (density × area × length) and `inertia`,
+        // if given (the same body as a rigid link), is not used.
+        b.type = BodyType::flexible;
+        b.mass = s.number("mass", " (kg)", positive).value_or(0.0);
+        read_flexible(s, b);
+      } else if (s.has("inertia")) {
         b.inertia = s.required_number("inertia", " (kg·m² about the centre of mass)", positive, 1.0);
       } else {
         b.type = BodyType::point_mass;  // no inertia: a point mass, coordinates [x, y]
@@ -346,6 +352,62 @@ class Loader {
       markers_.push_back(b.markers);
       m.bodies.push_back(b);
     }
+  }
+
+  /// A body's `flexible:` map: an ANCF beam (core/beam.hpp) along the body's x axis.
+  void read_flexible(Section& body, Body& b) {
+    Section f(r_, body.get("flexible"), body.node(), body.element() + " flexible",
+              {"length", "elements", "section", "youngs_modulus", "density", "damping"});
+    beam::Mesh& m = b.mesh;
+    m.length = f.required_number("length", " (m, end A at x = -length/2, B at +length/2)",
+                                 positive, 1.0);
+    const double elements = f.number("elements", "", positive).value_or(4.0);
+    if (elements != std::floor(elements) || elements > 1000)
+      r_.error(f.get("elements"), f.element(), "elements must be a whole number 1 … 1000");
+    m.elements = static_cast<int>(elements);
+    const double e = f.required_number("youngs_modulus", " (Pa)", positive, 1.0);
+    const double rho = f.number("density", " (kg/m³)", positive).value_or(0.0);
+    b.structural_damping =
+        f.number("damping", " (s, Kelvin–Voigt retardation time)", non_negative).value_or(0.0);
+    if (!f.has("section")) {
+      r_.error(f.get("length").IsDefined() ? body.get("flexible") : body.node(), f.element(),
+               "missing required key 'section': {rectangle: [width, height]}, {tube: [outer "
+               "diameter, inner diameter]}, {circle: diameter} or {area, inertia, fibre}");
+      return;
+    }
+    Section sec(r_, f.get("section"), f.node(), f.element() + " section",
+                {"rectangle", "tube", "circle", "area", "inertia", "fibre"});
+    const int shapes = sec.has("rectangle") + sec.has("tube") + sec.has("circle") + sec.has("area");
+    if (shapes != 1) {
+      r_.error(f.get("section"), sec.element(),
+               "give exactly one of rectangle: [width, height], tube: [outer diameter, inner "
+               "diameter], circle: diameter, or area with inertia and fibre");
+      return;
+    }
+    beam::Section& s = m.section;
+    if (auto r = sec.vec2("rectangle", " (m: width across the plane, height in it)")) {
+      if (!(r->x() > 0 && r->y() > 0))
+        r_.error(sec.get("rectangle"), sec.element(), "width and height must be > 0 m");
+      s = beam::rectangle(r->x(), r->y(), e, rho);
+    } else if (auto t = sec.vec2("tube", " (m: outer and inner diameter)")) {
+      if (!(t->x() > t->y() && t->y() >= 0))
+        r_.error(sec.get("tube"), sec.element(), "outer diameter must exceed the inner one (>= 0)");
+      const double d4 = std::pow(t->x(), 4) - std::pow(t->y(), 4);
+      s.area = M_PI / 4.0 * (t->x() * t->x() - t->y() * t->y());
+      s.inertia = M_PI / 64.0 * d4;
+      s.fibre = 0.5 * t->x();
+    } else if (auto d = sec.number("circle", " (m, diameter)", positive)) {
+      s.area = M_PI / 4.0 * *d * *d;
+      s.inertia = M_PI / 64.0 * std::pow(*d, 4);
+      s.fibre = 0.5 * *d;
+    } else if (sec.has("area")) {
+      s.area = sec.required_number("area", " (m²)", positive, 1.0);
+      s.inertia = sec.required_number("inertia", " (m⁴, second moment of area)", positive, 1.0);
+      s.fibre = sec.required_number("fibre", " (m, outermost fibre from the neutral axis)",
+                                    non_negative, 0.0);
+    }
+    s.youngs_modulus = e;
+    s.density = rho;
   }
 
   /// A clearance parameter: from the joint, else from clearance_defaults.

@@ -29,12 +29,12 @@ void apply(const Model&, Workspace& ws, const Load& l, int index) {
   // Application points: the frame body takes its force at the other body's point.
   const bool frame_a = l.frame_body == l.a.body && l.a.body != kGround;
   const bool frame_b = !frame_a && l.frame_body == l.b.body && l.b.body != kGround;
-  const Vec2 s_a = frame_a ? Vec2(pb.r - ka.r) : pa.s;
-  const Vec2 s_b = frame_b ? Vec2(pa.r - kb.r) : pb.s;
+  const PointKin qa = frame_a ? point_kin(ka, ka.A.transpose() * (pb.r - ka.r)) : pa;
+  const PointKin qb = frame_b ? point_kin(kb, kb.A.transpose() * (pa.r - kb.r)) : pb;
   LoadOutput& out = ws.load_out[index];
   out.force = -f;
   out.deflection = defl;
-  out.power = apply_force(ws.g, ka, s_a, f) + apply_force(ws.g, kb, s_b, -f);
+  out.power = apply_force(ws.g, qa, f) + apply_force(ws.g, qb, -f);
   // Torsional part.
   const double theta = kb.phi - ka.phi - l.angle0, theta_dot = kb.omega - ka.omega;
   out.torque = l.stiffness * theta + l.damping * theta_dot;

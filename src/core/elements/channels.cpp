@@ -12,7 +12,7 @@ void emit(const Model& model, const Workspace& ws, const Eigen::VectorXd& y, Cha
   for (int b = 0; b < ws.nb; ++b) {
     const Body& body = model.bodies[b];
     s.element(body.name);
-    kind_of(body).channels(ws.kin[b], ws.qdd.data() + ws.blocks[b].offset, s);
+    kind_of(body).channels(body, ws.kin[b], ws.qdd.data() + ws.blocks[b].offset, s);
   }
   int c = 0;
   for (size_t ji = 0; ji < model.joints.size(); ++ji) {

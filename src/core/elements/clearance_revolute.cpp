@@ -33,8 +33,8 @@ void clearance_gap(const Model& model, const Workspace& ws, int k, const double*
 void clearance_forces(const Model& model, Workspace& ws, int k, const double* y, double* ydot) {
   const Joint& j = model.joints[ws.clearance_joints[k]];
   const Clearance& cl = *j.clearance;
-  const BodyKin &kj = ws.kin_of(j.a.body), &kb = ws.kin_of(j.b.body);
-  const PointKin pj = point_kin(kj, j.a.s), pb = point_kin(kb, j.b.s);
+  const PointKin pj = point_kin(ws.kin_of(j.a.body), j.a.s);
+  const PointKin pb = point_kin(ws.kin_of(j.b.body), j.b.s);
   ClearanceOutput& out = ws.clearance_out[k];
   out.e = pj.r - pb.r;
   out.e_len = out.e.norm();
@@ -43,7 +43,7 @@ void clearance_forces(const Model& model, Workspace& ws, int k, const double* y,
   const Vec2 tng = perp(n);
   const Vec2 e_dot = pj.v - pb.v;
   out.delta_dot = out.e_len > 0.0 ? e_dot.dot(n) : 0.0;
-  out.v_t = e_dot.dot(tng) + cl.journal_radius * kj.omega - cl.bearing_radius * kb.omega;
+  out.v_t = e_dot.dot(tng) + cl.journal_radius * pj.omega - cl.bearing_radius * pb.omega;
   out.f_n = out.f_t = out.potential = out.dissipation = 0.0;
   out.force.setZero();
   const int iz = ws.aux_bristle[k];
@@ -64,12 +64,13 @@ void clearance_forces(const Model& model, Workspace& ws, int k, const double* y,
   out.potential = contact_potential(out.delta, cl.contact);
   const double elastic = hertz(out.delta, cl.contact);
   out.dissipation = (out.f_n - elastic) * out.delta_dot - out.f_t * out.v_t;
-  // Normal force through the centres; friction at each body's contact point.
+  // Normal force through the centres; friction at each body's contact point, i.e. the friction
+  // force at the centre and its moment R f_t about it (n × t = 1).
   out.force = -out.f_n * n + out.f_t * tng;
-  apply_force(ws.g, kj, pj.s, -out.f_n * n);
-  apply_force(ws.g, kb, pb.s, out.f_n * n);
-  apply_force(ws.g, kj, pj.s + cl.journal_radius * n, out.f_t * tng);
-  apply_force(ws.g, kb, pb.s + cl.bearing_radius * n, -out.f_t * tng);
+  apply_force(ws.g, pj, out.force);
+  apply_force(ws.g, pb, -out.force);
+  apply_point_torque(ws.g, pj, cl.journal_radius * out.f_t);
+  apply_point_torque(ws.g, pb, -cl.bearing_radius * out.f_t);
   ws.potential += out.potential;
   ws.dissipated_power += out.dissipation;
 }

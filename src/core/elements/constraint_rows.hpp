@@ -13,17 +13,15 @@ inline void revolute_rows(const Workspace& ws, const PointRef& a, const PointRef
   const BodyKin &ka = ws.kin_of(a.body), &kb = ws.kin_of(b.body);
   const PointKin pa = point_kin(ka, a.s), pb = point_kin(kb, b.s);
   out.phi.segment<2>(row) = pa.r - pb.r;
-  const Vec2 ps_a = perp(pa.s), ps_b = perp(pb.s);
-  put_row(out.phi_q, row, ka, 1, 0, ps_a.x());
-  put_row(out.phi_q, row + 1, ka, 0, 1, ps_a.y());
-  put_row(out.phi_q, row, kb, -1, 0, -ps_b.x());
-  put_row(out.phi_q, row + 1, kb, 0, -1, -ps_b.y());
+  put_point_row(out.phi_q, row, pa, Vec2(1, 0));
+  put_point_row(out.phi_q, row + 1, pa, Vec2(0, 1));
+  put_point_row(out.phi_q, row, pb, Vec2(-1, 0));
+  put_point_row(out.phi_q, row + 1, pb, Vec2(0, -1));
   if (out.phi_dot) out.phi_dot->segment<2>(row) = pa.v - pb.v;
-  if (out.gamma)
-    out.gamma->segment<2>(row) = pa.s * ka.omega * ka.omega - pb.s * kb.omega * kb.omega;
+  if (out.gamma) out.gamma->segment<2>(row) = pb.a_vel - pa.a_vel;
 }
 
-/// Φ = φ_b − φ_a − angle0 − f (1 row).
+/// Φ = φ_b − φ_a − angle0 − f (1 row). Rigid bodies and the ground only (finalize).
 inline void angle_row(const Workspace& ws, int body_a, int body_b, double angle0, double f, double fd,
                double fdd, int row, ConstraintOut& out) {
   const BodyKin &ka = ws.kin_of(body_a), &kb = ws.kin_of(body_b);
@@ -34,7 +32,8 @@ inline void angle_row(const Workspace& ws, int body_a, int body_b, double angle0
   if (out.gamma) (*out.gamma)[row] = fdd;
 }
 
-/// Φ = (A_a v')·(r_b − r_a) − f with v' fixed in body a (1 row).
+/// Φ = (A_a v')·(r_b − r_a) − f with v' fixed in body a (1 row). Body a rigid or the ground, b
+/// rigid, a point mass or the ground (finalize).
 inline void dot_row(const Workspace& ws, const PointRef& a, const PointRef& b, const Vec2& v_body,
              double f, double fd, double fdd, int row, ConstraintOut& out) {
   const BodyKin &ka = ws.kin_of(a.body), &kb = ws.kin_of(b.body);

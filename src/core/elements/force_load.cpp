@@ -6,12 +6,11 @@ namespace lash::force_load {
 namespace {
 
 void apply(const Model&, Workspace& ws, const Load& l, int index) {
-  const BodyKin& k = ws.kin_of(l.a.body);
-  const Vec2 s = k.A * l.a.s;
+  const PointKin p = point_kin(ws.kin_of(l.a.body), l.a.s);
   const Vec2 f(ws.load_expr[index][0].eval(), ws.load_expr[index][1].eval());
   LoadOutput& out = ws.load_out[index];
   out.force = f;
-  out.power = apply_force(ws.g, k, s, f);
+  out.power = apply_force(ws.g, p, f);
   ws.input_power += out.power;
 }
 

@@ -1,15 +1,22 @@
-// Point mass: coordinates [x, y], no orientation; mass block diag(m, m); kinetic energy
-// ½ m |v|². A body given without `inertia` (absorber masses, pistons, pendulum bobs).
+// Point mass: coordinates [x, y], no orientation; mass block diag(m, m); gravity m g; kinetic
+// energy ½ m |v|². A body given without `inertia` (absorber masses, pistons, pendulum bobs).
 #include "core/elements/registry.hpp"
 
 namespace lash::point_mass {
 namespace {
 
-void mass_inverse(const Body& b, double* minv) { minv[0] = minv[1] = 1.0 / b.mass; }
+int coordinates(const Body&) { return 2; }
+
+void mass(const Body& b, Eigen::Ref<Eigen::MatrixXd> m) { m(0, 0) = m(1, 1) = b.mass; }
+
+void initial(const Body& b, double* q, double* qd) {
+  q[0] = b.r0.x(), q[1] = b.r0.y();
+  if (qd) qd[0] = b.v0.x(), qd[1] = b.v0.y();
+}
 
 double kinetic_energy(const Body& b, const BodyKin& k) { return 0.5 * b.mass * k.v.squaredNorm(); }
 
-void channels(const BodyKin& k, const double* qdd, ChannelSink& s) {
+void channels(const Body&, const BodyKin& k, const double* qdd, ChannelSink& s) {
   s.add("x", "m", "x position", k.r.x());
   s.add("y", "m", "y position", k.r.y());
   s.add("vx", "m/s", "x velocity", k.v.x());
@@ -20,6 +27,7 @@ void channels(const BodyKin& k, const double* qdd, ChannelSink& s) {
 
 }  // namespace
 
-const BodyKind kKind{"point_mass", 2, mass_inverse, kinetic_energy, channels};
+const BodyKind kKind{"point_mass", coordinates, mass, initial, point_gravity, kinetic_energy,
+                     channels};
 
 }  // namespace lash::point_mass

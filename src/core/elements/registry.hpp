@@ -37,6 +37,9 @@ class ChannelSink {
     ++n_;
   }
   size_t count() const { return n_; }
+  /// True while collecting descriptions: values passed to add() are not read (an element whose
+  /// values are costly, or need a state, may pass 0).
+  bool describing() const { return info_ != nullptr; }
 
  private:
   std::vector<ChannelInfo>* info_ = nullptr;
@@ -56,12 +59,17 @@ struct ConstraintOut {
 
 struct BodyKind {
   const char* name;
-  int coordinates;
-  /// Writes the diagonal of the block's M⁻¹ (block size entries).
-  void (*mass_inverse)(const Body&, double* minv);
+  int (*coordinates)(const Body&);
+  /// Writes the block's constant mass matrix (coordinates × coordinates, zeroed).
+  void (*mass)(const Body&, Eigen::Ref<Eigen::MatrixXd> block);
+  /// The block of q (and of q̇ unless null) at the body's initial pose and velocity.
+  void (*initial)(const Body&, double* q, double* qd);
+  /// Adds the body's own generalised forces (gravity; a flexible link's elastic and damping
+  /// forces) to ws.g and their energy to ws.potential / ws.dissipated_power.
+  void (*forces)(const Model&, const Body&, const BodyKin&, Workspace&);
   double (*kinetic_energy)(const Body&, const BodyKin&);
   /// Channels from the body's kinematics and its block of q̈.
-  void (*channels)(const BodyKin&, const double* qdd, ChannelSink&);
+  void (*channels)(const Body&, const BodyKin&, const double* qdd, ChannelSink&);
 };
 
 struct JointKind {
@@ -89,9 +97,17 @@ struct SensorKind {
   const char* description;
 };
 
+/// Gravity on a body whose block starts with the position of its centre of mass (rigid body,
+/// point mass): m g on (x, y), potential −m g·r.
+inline void point_gravity(const Model& model, const Body& body, const BodyKin& k, Workspace& ws) {
+  ws.g.segment<2>(k.block.offset) += body.mass * model.gravity;
+  ws.potential -= body.mass * model.gravity.dot(k.r);
+}
+
 // --- the kinds (one file each) -------------------------------------------------------------
 namespace rigid_body { extern const BodyKind kKind; }
 namespace point_mass { extern const BodyKind kKind; }
+namespace flexible_link { extern const BodyKind kKind; }
 namespace revolute { extern const JointKind kKind; }
 namespace translational { extern const JointKind kKind; }
 namespace fixed_joint { extern const JointKind kKind; }
@@ -106,7 +122,8 @@ extern const SensorKind kAccelerometer, kVelocity, kDisplacement;
 }
 
 /// Tables indexed by the model's enums (BodyType, JointType, LoadType, SensorType).
-inline const std::array<const BodyKind*, 2> kBodyKinds{&rigid_body::kKind, &point_mass::kKind};
+inline const std::array<const BodyKind*, 3> kBodyKinds{&rigid_body::kKind, &point_mass::kKind,
+                                                      &flexible_link::kKind};
 inline const std::array<const JointKind*, 4> kJointKinds{
     &revolute::kKind, &translational::kKind, &fixed_joint::kKind, &distance::kKind};
 inline const std::array<const LoadKind*, 5> kLoadKinds{

@@ -1,20 +1,27 @@
 // Rigid body: coordinates [x, y, φ] of its centre of mass and orientation; mass block
-// diag(m, m, I); kinetic energy ½ m |v|² + ½ I ω².
+// diag(m, m, I); gravity m g at the centre of mass; kinetic energy ½ m |v|² + ½ I ω².
 #include "core/elements/registry.hpp"
 
 namespace lash::rigid_body {
 namespace {
 
-void mass_inverse(const Body& b, double* minv) {
-  minv[0] = minv[1] = 1.0 / b.mass;
-  minv[2] = 1.0 / b.inertia;
+int coordinates(const Body&) { return 3; }
+
+void mass(const Body& b, Eigen::Ref<Eigen::MatrixXd> m) {
+  m(0, 0) = m(1, 1) = b.mass;
+  m(2, 2) = b.inertia;
+}
+
+void initial(const Body& b, double* q, double* qd) {
+  q[0] = b.r0.x(), q[1] = b.r0.y(), q[2] = b.phi0;
+  if (qd) qd[0] = b.v0.x(), qd[1] = b.v0.y(), qd[2] = b.omega0;
 }
 
 double kinetic_energy(const Body& b, const BodyKin& k) {
   return 0.5 * (b.mass * k.v.squaredNorm() + b.inertia * k.omega * k.omega);
 }
 
-void channels(const BodyKin& k, const double* qdd, ChannelSink& s) {
+void channels(const Body&, const BodyKin& k, const double* qdd, ChannelSink& s) {
   s.add("x", "m", "x of the centre of mass", k.r.x());
   s.add("y", "m", "y of the centre of mass", k.r.y());
   s.add("phi", "rad", "orientation", k.phi);
@@ -28,6 +35,6 @@ void channels(const BodyKin& k, const double* qdd, ChannelSink& s) {
 
 }  // namespace
 
-const BodyKind kKind{"rigid", 3, mass_inverse, kinetic_energy, channels};
+const BodyKind kKind{"rigid", coordinates, mass, initial, point_gravity, kinetic_energy, channels};
 
 }  // namespace lash::rigid_body

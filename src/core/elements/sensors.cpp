@@ -1,6 +1,6 @@
 // Virtual sensors at a point P of a body, along a unit axis fixed in the body or in the ground:
 // accelerometer  a = (a_P − g)·u with gravity (specific force, what a real one reads) or a_P·u,
-//                a_P = r̈ + α perp(s) − ω² s;
+//                a_P = J_P q̈ + a_vel (kinematics.hpp: r̈ + α perp(s) − ω² s on a rigid body);
 // velocity probe v = v_P·u;   displacement probe x = r_P·u.
 // The three differ only in the quantity read, so they share this file.
 #include "core/elements/registry.hpp"
@@ -13,14 +13,7 @@ Vec2 axis_world(const Workspace& ws, const Sensor& s) {
 }
 
 double acceleration(const Model& m, const Workspace& ws, const Sensor& s) {
-  const BodyKin& k = ws.kin_of(s.at.body);
-  Vec2 a = Vec2::Zero();
-  if (k.block.offset >= 0) {
-    const Vec2 sw = k.A * s.at.s;
-    const double alpha = k.block.rot >= 0 ? ws.qdd[k.block.rot] : 0.0;
-    a = Vec2(ws.qdd[k.block.offset], ws.qdd[k.block.offset + 1]) + alpha * perp(sw) -
-        k.omega * k.omega * sw;
-  }
+  Vec2 a = point_acceleration(point_kin(ws.kin_of(s.at.body), s.at.s), ws.qdd);
   if (s.gravity) a -= m.gravity;
   return a.dot(axis_world(ws, s));
 }

@@ -6,8 +6,8 @@ namespace lash::spring_damper {
 namespace {
 
 void apply(const Model&, Workspace& ws, const Load& l, int index) {
-  const BodyKin &ka = ws.kin_of(l.a.body), &kb = ws.kin_of(l.b.body);
-  const PointKin pa = point_kin(ka, l.a.s), pb = point_kin(kb, l.b.s);
+  const PointKin pa = point_kin(ws.kin_of(l.a.body), l.a.s);
+  const PointKin pb = point_kin(ws.kin_of(l.b.body), l.b.s);
   const Vec2 d = pb.r - pa.r;
   const double len = d.norm();
   const Vec2 u = len > 0.0 ? Vec2(d / len) : Vec2::UnitX();
@@ -16,7 +16,7 @@ void apply(const Model&, Workspace& ws, const Load& l, int index) {
   const double tension = l.stiffness * stretch + l.damping * len_dot;
   LoadOutput& out = ws.load_out[index];
   out.force = -tension * u;  // on body b
-  out.power = apply_force(ws.g, ka, pa.s, tension * u) + apply_force(ws.g, kb, pb.s, out.force);
+  out.power = apply_force(ws.g, pa, tension * u) + apply_force(ws.g, pb, out.force);
   ws.potential += 0.5 * l.stiffness * stretch * stretch;
   ws.dissipated_power += l.damping * len_dot * len_dot;
 }

@@ -1,0 +1,78 @@
+// `lash modes MODEL`: the natural frequencies of each flexible link of a model, from its mesh,
+// beside the Euler–Bernoulli closed forms for the same supports, so that a user can see that the
+// mesh resolves the modes that matter before running.
+#include "cli/modes.hpp"
+
+#include <array>
+#include <cmath>
+#include <iomanip>
+
+namespace lash::cli {
+namespace {
+
+// Roots β_k L of the Euler–Bernoulli frequency equations (ω_k = (β_k L)² √(EI/(ρA L⁴))):
+// clamped–free cos βL cosh βL = −1, free–free cos βL cosh βL = 1 (elastic modes). Blevins,
+// Formulas for Natural Frequency and Mode Shape (1979), Table 8-1.
+constexpr std::array<double, 5> kClampedFree{1.87510407, 4.69409113, 7.85475744, 10.99554073,
+                                             14.13716839};
+constexpr std::array<double, 5> kFreeFree{4.73004074, 7.85320462, 10.99560784, 14.13716549,
+                                          17.27875966};
+
+void table(const beam::Mesh& m, beam::Support support, int count, std::ostream& out) {
+  const beam::Section& s = m.section;
+  const double bending = std::sqrt(s.youngs_modulus * s.inertia /
+                                   (s.density * s.area * std::pow(m.length, 4)));
+  const double axial = std::sqrt(s.youngs_modulus / s.density) / m.length;
+  const bool clamped = support == beam::Support::clamped;
+  out << (clamped ? "  end A clamped, end B free:\n" : "  both ends free (rigid-body modes left out):\n")
+      << "    mode  kind      f mesh (Hz)    f closed form (Hz)   difference\n";
+  int nb = 0, na = 0, shown = 0;
+  const std::vector<beam::Mode> all = beam::modes(m, support);
+  // A free beam's three rigid-body modes come first (beam.hpp), at round-off frequencies.
+  for (size_t i = clamped ? 0 : 3; i < all.size() && shown < count; ++i) {
+    const beam::Mode& md = all[i];
+    const bool is_bending = md.transverse > 0.5;
+    double exact = NAN;
+    if (is_bending) {
+      const auto& roots = clamped ? kClampedFree : kFreeFree;
+      if (nb < static_cast<int>(roots.size())) exact = roots[nb] * roots[nb] * bending;
+      ++nb;
+    } else {
+      ++na;  // axial: clamped–free (2k − 1)π/2 √(E/ρ)/L, free–free kπ √(E/ρ)/L
+      exact = (clamped ? (2 * na - 1) * M_PI / 2 : na * M_PI) * axial;
+    }
+    out << "    " << std::setw(4) << ++shown << "  " << std::left << std::setw(8)
+        << (is_bending ? "bending" : "axial") << std::right << std::setw(13) << std::setprecision(6)
+        << md.omega / (2 * M_PI) << "  " << std::setw(19);
+    if (std::isnan(exact))
+      out << "-" << "\n";
+    else
+      out << exact / (2 * M_PI) << "  " << std::showpos << std::setw(10) << std::setprecision(2)
+          << std::scientific << (md.omega - exact) / exact << std::noshowpos << std::defaultfloat
+          << "\n";
+  }
+}
+
+}  // namespace
+
+int print_modes(const Model& model, int count, std::ostream& out) {
+  int links = 0;
+  for (const Body& b : model.bodies) {
+    if (!b.flexible()) continue;
+    ++links;
+    const beam::Mesh& m = b.mesh;
+    const beam::Section& s = m.section;
+    out << "body '" << b.name << "': flexible link, " << m.length << " m, " << m.elements
+        << " elements; EA = " << s.youngs_modulus * s.area << " N, EI = "
+        << s.youngs_modulus * s.inertia << " N·m², ρA = " << s.density * s.area << " kg/m, mass "
+        << b.mass << " kg\n";
+    table(m, beam::Support::clamped, count, out);
+    table(m, beam::Support::free, count, out);
+    out << "  (a link pinned at both ends lies between these; in the mechanism its joints and the "
+           "bodies they hold shift them)\n";
+  }
+  if (links == 0) out << "no flexible links in this model (give a body a 'flexible:' map)\n";
+  return links;
+}
+
+}  // namespace lash::cli

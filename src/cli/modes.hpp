@@ -1,0 +1,15 @@
+#pragma once
+/// @file modes.hpp
+/// `lash modes MODEL`: natural frequencies of each flexible link from its mesh (clamped–free and
+/// free–free), beside the Euler–Bernoulli closed forms.
+#include <ostream>
+
+#include "core/model.hpp"
+
+namespace lash::cli {
+
+/// Prints the first `count` elastic modes of every flexible link of `model` for each support.
+/// Returns the number of flexible links.
+int print_modes(const Model& model, int count, std::ostream& out);
+
+}  // namespace lash::cli
