@@ -364,7 +364,8 @@ class Loader {
     const double elements = f.number("elements", "", positive).value_or(4.0);
     if (elements != std::floor(elements) || elements > 1000)
       r_.error(f.get("elements"), f.element(), "elements must be a whole number 1 … 1000");
-    m.elements = static_cast<int>(elements);
+    else
+      m.elements = static_cast<int>(elements);
     const double e = f.required_number("youngs_modulus", " (Pa)", positive, 1.0);
     const double rho = f.number("density", " (kg/m³)", positive).value_or(0.0);
     b.structural_damping =
