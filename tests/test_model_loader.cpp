@@ -216,7 +216,7 @@ TEST(ModelLoader, ExamplesLoad) {
   const std::vector<std::string> names{
       "flores_slider_crank.yaml", "flores_slider_crank_ideal.yaml",
       "flores_slider_crank_crank_rod_clearance.yaml", "flores_slider_crank_lugre.yaml",
-      "flores_slider_crank_flexible_rod.yaml",
+      "flores_slider_crank_flexible_rod.yaml", "spin_up_beam.yaml",
       "tmd_slider_crank.yaml", "radial_engine_5.yaml", "press_slider_crank.yaml",
       "amiri_slider_crank.yaml", "amiri_slider_crank_absorbers.yaml", "amiri_four_bar.yaml",
       "amiri_four_bar_absorbers.yaml", "erkaya_articulated.yaml", "erkaya_compliant.yaml",

@@ -3,6 +3,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
 #include <Eigen/QR>
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -119,10 +120,17 @@ int Model::clearance_joint_count() const {
 }
 
 /// Pose and velocity of a body from y into k (whose block, and mesh for a flexible link, are set).
-inline void read_kin(BodyKin& k, int nq, const double* y) {
+/// A flexible link's coordinates are read through k.q, k.qd: into `store` (the workspace's copy,
+/// so that what the elements read stays valid after y is gone), or into y itself when null.
+inline void read_kin(BodyKin& k, int nq, const double* y, double* store = nullptr) {
   const BodyBlock& bl = k.block;
   if (k.mesh) {
     // A flexible link: the chord from end A (node 0) to end B (the last node).
+    if (store) {
+      std::copy(y + bl.offset, y + bl.offset + bl.size, store + bl.offset);
+      std::copy(y + nq + bl.offset, y + nq + bl.offset + bl.size, store + nq + bl.offset);
+      y = store;
+    }
     k.q = y + bl.offset;
     k.qd = y + nq + bl.offset;
     const int b = bl.size - beam::kNodeCoordinates;
@@ -191,7 +199,7 @@ std::vector<std::string> state_names(const Model& model, const Workspace& ws) {
 
 void update_kin(Workspace& ws, const double* y) {
   // In place: the blocks were set once by the Workspace; only pose and velocity change.
-  for (BodyKin& k : ws.kin) read_kin(k, ws.nq, y);
+  for (BodyKin& k : ws.kin) read_kin(k, ws.nq, y, ws.flexible_state.data());
 }
 
 Workspace::Workspace(const Model& model) {
@@ -229,10 +237,19 @@ Workspace::Workspace(const Model& model) {
   }
   kin.assign(nb, BodyKin{});
   meshes.resize(nb);
+  // Until the first evaluation the kinematics are those of the initial poses at rest (channel
+  // descriptions read them).
+  flexible_state = Eigen::VectorXd::Zero(2 * nq);
   for (int b = 0; b < nb; ++b) {
     kin[b].block = blocks[b];
     meshes[b] = model.bodies[b].mesh;
-    if (model.bodies[b].flexible()) kin[b].mesh = &meshes[b];
+    const Body& body = model.bodies[b];
+    kind_of(body).initial(body, flexible_state.data() + blocks[b].offset, nullptr);
+    if (body.flexible()) kin[b].mesh = &meshes[b];
+  }
+  {
+    const Eigen::VectorXd y0 = flexible_state;
+    for (BodyKin& k : kin) read_kin(k, nq, y0.data(), flexible_state.data());
   }
   // Auxiliary states: the clearance joints', then the speed-profile drivers' positions.
   nc = static_cast<int>(clearance_joints.size());
@@ -459,16 +476,25 @@ Eigen::VectorXd initial_state(const Model& model, Workspace& ws) {
   Eigen::MatrixXd phi_q(rows, nq);
 
   // Positions: Gauss–Newton with minimum-norm corrections, each body moved as a rigid body (a
-  // flexible link keeps its shape: assembly does not strain it).
+  // flexible link keeps its shape: assembly does not strain it). Where rigid motions cannot
+  // close the joints (a link clamped at both ends to bodies posed for a bent link), the rest is
+  // closed by corrections of every coordinate, which bend the link.
+  const bool flexible = std::any_of(model.bodies.begin(), model.bodies.end(),
+                                    [](const Body& b) { return b.flexible(); });
   double residual = 0.0;
-  for (int it = 0; it < 100; ++it) {
+  for (int it = 0; it < 130; ++it) {
     update_kin(ws, y.data());
     build_constraints(model, ws, 0.0, y.data(), ideal, phi, phi_q, nullptr, nullptr);
     residual = phi.cwiseAbs().maxCoeff();
     if (residual < 1e-13) break;
-    Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(phi_q *
-                                                                rigid_motion_basis(model, ws, y.data()));
-    move_rigidly(model, ws, y, -cod.solve(phi));
+    if (flexible && it < 30) {
+      Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(
+          phi_q * rigid_motion_basis(model, ws, y.data()));
+      move_rigidly(model, ws, y, -cod.solve(phi));
+    } else {
+      Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(phi_q);
+      y.head(nq) -= cod.solve(phi);
+    }
   }
   if (!(residual < 1e-10))
     throw std::runtime_error("initial assembly failed: the joints and drivers cannot all be "
@@ -481,15 +507,27 @@ Eigen::VectorXd initial_state(const Model& model, Workspace& ws) {
   // motion a drive started impulsively gives — a body no driver moves stays at rest, and a driver
   // between two otherwise free bodies splits its motion so that their momentum is conserved.
   // Unlike a Euclidean minimum norm it does not depend on the units of the coordinates.
-  // The correction is a rigid motion of each body, q̇ = T u (a flexible link starts without
-  // strain rates, which would ring through the run), so M and Φ_q are those of u: TᵀMT, Φ_q T.
-  update_kin(ws, y.data());
-  build_constraints(model, ws, 0.0, y.data(), ideal, phi, phi_q, &phi_dot, nullptr);
-  const Eigen::MatrixXd t = rigid_motion_basis(model, ws, y.data());
-  const Eigen::LLT<Eigen::MatrixXd> chol(t.transpose() * mass_matrix(ws) * t);
-  const Eigen::MatrixXd scaled = chol.matrixU().solve<Eigen::OnTheRight>(Eigen::MatrixXd(phi_q * t));
-  Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(scaled);
-  y.segment(nq, nq) -= t * chol.matrixU().solve(cod.solve(phi_dot));
+  // With flexible links the correction is a rigid motion of each body if one satisfies the
+  // constraints, q̇ = T u (a link starts without strain rates, which would ring through the run),
+  // with M and Φ_q those of u: TᵀMT, Φ_q T. Where none does (a link clamped at both ends whose
+  // ends must turn differently), the correction is in every coordinate, again with the least
+  // kinetic energy: a light link then takes the deformation rate.
+  auto correct_velocities = [&](const Eigen::MatrixXd& t) {
+    update_kin(ws, y.data());
+    build_constraints(model, ws, 0.0, y.data(), ideal, phi, phi_q, &phi_dot, nullptr);
+    const Eigen::LLT<Eigen::MatrixXd> chol(t.transpose() * mass_matrix(ws) * t);
+    const Eigen::MatrixXd scaled =
+        chol.matrixU().solve<Eigen::OnTheRight>(Eigen::MatrixXd(phi_q * t));
+    Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(scaled);
+    y.segment(nq, nq) -= t * chol.matrixU().solve(cod.solve(phi_dot));
+    build_constraints(model, ws, 0.0, y.data(), ideal, phi, phi_q, &phi_dot, nullptr);
+    return phi_dot.size() == 0 ? 0.0 : phi_dot.cwiseAbs().maxCoeff();
+  };
+  const Eigen::VectorXd guess = y;
+  if (!flexible || !(correct_velocities(rigid_motion_basis(model, ws, y.data())) < 1e-10)) {
+    y = guess;
+    correct_velocities(Eigen::MatrixXd::Identity(nq, nq));
+  }
 
   if (const std::string why = constraint_problem(model, ws, 0.0, y, false); !why.empty())
     throw std::runtime_error(why);

@@ -94,6 +94,9 @@ struct Workspace {
   std::vector<MassEntry> mass_coupling;
   /// Flexible links' meshes, per body (the BodyKin of a flexible link points here).
   std::vector<beam::Mesh> meshes;
+  /// Flexible links' [q, q̇] blocks of the last update_kin (2 nq, at the blocks' offsets): their
+  /// BodyKin points here.
+  Eigen::VectorXd flexible_state;
   /// Cholesky factor of M where it is not diagonal and there are no constraints (set lazily).
   std::unique_ptr<Eigen::LLT<Eigen::MatrixXd>> mass_factor;
 

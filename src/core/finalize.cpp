@@ -48,9 +48,9 @@ class Checker {
   bool flexible(int b) const { return b != kGround && m_.bodies[b].flexible(); }
   /// The element kinds a flexible link takes, for messages.
   static constexpr const char* kOnFlexible =
-      "a flexible link takes revolute joints (with or without clearance), distance joints, "
-      "forces, spring-dampers and sensors with axes in the ground's frame; pin a short rigid "
-      "body to it for the rest";
+      "a flexible link takes revolute joints (with or without clearance), fixed joints to a rigid "
+      "body or the ground (a clamped end), distance joints, forces, spring-dampers and sensors "
+      "with axes in the ground's frame; pin a short rigid body to it for the rest";
   std::string body_name(int b) const { return b == kGround ? "ground" : m_.bodies[b].name; }
 
   void names() {
@@ -132,11 +132,12 @@ class Checker {
     const std::string el = "joint '" + j.name + "'";
     if (!valid_body(j.a.body) || !valid_body(j.b.body)) return error(el, "body out of range");
     if (j.a.body == j.b.body) error(el, "joins body '" + body_name(j.a.body) + "' to itself");
-    if ((flexible(j.a.body) || flexible(j.b.body)) &&
-        (j.type == JointType::translational || j.type == JointType::fixed))
-      return error(el, std::string("a ") +
-                           (j.type == JointType::fixed ? "fixed" : "translational") +
-                           " joint needs the axes of a rigid body; " + kOnFlexible);
+    if ((flexible(j.a.body) || flexible(j.b.body)) && j.type == JointType::translational)
+      return error(el, std::string("a translational joint needs the axes of a rigid body; ") +
+                           kOnFlexible);
+    if (flexible(j.a.body) && flexible(j.b.body) && j.type == JointType::fixed)
+      return error(el, "a fixed joint between two flexible links is not supported; join them "
+                       "through a short rigid body");
     if (j.clearance) {
       Clearance& c = *j.clearance;
       if (j.type != JointType::revolute) error(el, "only a revolute joint can have clearance");
@@ -160,6 +161,14 @@ class Checker {
         if (std::abs(j.axis.norm() - 1.0) > 1e-12) error(el, "axis must be a unit vector");
         break;
       case JointType::fixed:
+        if (flexible(j.a.body) || flexible(j.b.body)) {
+          // A clamped end: the link's axis at the point keeps its initial angle to the other body.
+          const int rigid = flexible(j.a.body) ? j.b.body : j.a.body;
+          if (rigid != kGround && !m_.bodies[rigid].rotates())
+            error(el, "a fixed joint clamps a flexible link to a rigid body or the ground, not to "
+                      "a point mass");
+          break;
+        }
         if (!rotates(j.a.body) || !rotates(j.b.body))
           error(el, "a fixed joint needs two rotating bodies (use a revolute joint to pin a "
                     "point mass)");

@@ -60,6 +60,7 @@ struct PointKin {
   double n[4] = {0, 0, 0, 0};   ///< flexible: shape functions s1…s4 at ξ
   double dn[4] = {0, 0, 0, 0};  ///< flexible: their x-derivatives
   Vec2 slope = Vec2::UnitX();   ///< flexible: r' at the point
+  Vec2 slope_rate = Vec2::Zero();  ///< flexible: ṙ' at the point
 };
 
 /// The kinematics of the point at body coordinates s_body (on a flexible link's axis, s_body.x
@@ -89,7 +90,7 @@ inline PointKin point_kin(const BodyKin& k, const Vec2& s_body) {
   const double* q = k.q + beam::kNodeCoordinates * el;
   const double* qd = k.qd + beam::kNodeCoordinates * el;
   p.r = p.v = p.slope = Vec2::Zero();
-  Vec2 slope_rate = Vec2::Zero();
+  Vec2& slope_rate = p.slope_rate;
   for (int i = 0; i < 4; ++i) {
     p.r += p.n[i] * Vec2(q[2 * i], q[2 * i + 1]);
     p.v += p.n[i] * Vec2(qd[2 * i], qd[2 * i + 1]);
@@ -115,6 +116,15 @@ inline void put_point_row(Eigen::MatrixXd& phi_q, int row, const PointKin& p, co
   phi_q(row, p.offset) += d.x();
   phi_q(row, p.offset + 1) += d.y();
   if (p.rot >= 0) phi_q(row, p.rot) += d.dot(perp(p.s));
+}
+
+/// Adds dᵀ ∂r'/∂e = dᵀ S'(ξ) (a row that depends on a flexible link's slope at the point) to row
+/// `row` of Φ_q.
+inline void put_slope_row(Eigen::MatrixXd& phi_q, int row, const PointKin& p, const Vec2& d) {
+  for (int i = 0; i < 4; ++i) {
+    phi_q(row, p.offset + 2 * i) += p.dn[i] * d.x();
+    phi_q(row, p.offset + 2 * i + 1) += p.dn[i] * d.y();
+  }
 }
 
 /// Acceleration of the point from q̈: J_P q̈ + a_vel.

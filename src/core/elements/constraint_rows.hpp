@@ -32,6 +32,43 @@ inline void angle_row(const Workspace& ws, int body_a, int body_b, double angle0
   if (out.gamma) (*out.gamma)[row] = fdd;
 }
 
+/// Φ = d_a × d_b (1 row): the directions at points a and b stay parallel, where one of the two
+/// bodies is a flexible link. On a link d is its slope r' at the point (ḋ = ṙ', no
+/// velocity-dependent acceleration); on a rigid body or the ground a unit vector fixed in it,
+/// A w (ḋ = ω perp(d), d̈ = α perp(d) − ω² d), with w at angle `angle0` (rigid body a) or −angle0
+/// (rigid body b) from its x axis, angle0 = φ_b − φ_a at the initial poses (a link's φ: its axis).
+/// ∂Φ/∂d_a = −perp(d_b), ∂Φ/∂d_b = perp(d_a).
+inline void slope_row(const Workspace& ws, const PointRef& a, const PointRef& b, double angle0,
+                      int row, ConstraintOut& out) {
+  const BodyKin &ka = ws.kin_of(a.body), &kb = ws.kin_of(b.body);
+  const PointKin pa = point_kin(ka, a.s), pb = point_kin(kb, b.s);
+  struct Side {
+    Vec2 d, d_dot, d_acc_vel;  // direction, its rate, the velocity part of its acceleration
+  };
+  auto side = [](const BodyKin& k, const PointKin& p, double w_angle) {
+    Side s;
+    if (p.beam) {
+      s.d = p.slope, s.d_dot = p.slope_rate, s.d_acc_vel = Vec2::Zero();
+    } else {
+      s.d = k.A * Vec2(std::cos(w_angle), std::sin(w_angle));
+      s.d_dot = k.omega * perp(s.d);
+      s.d_acc_vel = -k.omega * k.omega * s.d;
+    }
+    return s;
+  };
+  const Side sa = side(ka, pa, angle0), sb = side(kb, pb, -angle0);
+  out.phi[row] = cross(sa.d, sb.d);
+  const Vec2 ga = -perp(sb.d), gb = perp(sa.d);  // ∂Φ/∂d_a, ∂Φ/∂d_b
+  if (pa.beam) put_slope_row(out.phi_q, row, pa, ga);
+  else put_row(out.phi_q, row, ka, 0, 0, ga.dot(perp(sa.d)));
+  if (pb.beam) put_slope_row(out.phi_q, row, pb, gb);
+  else put_row(out.phi_q, row, kb, 0, 0, gb.dot(perp(sb.d)));
+  if (out.phi_dot) (*out.phi_dot)[row] = cross(sa.d_dot, sb.d) + cross(sa.d, sb.d_dot);
+  if (out.gamma)
+    (*out.gamma)[row] = -(cross(sa.d_acc_vel, sb.d) + 2.0 * cross(sa.d_dot, sb.d_dot) +
+                          cross(sa.d, sb.d_acc_vel));
+}
+
 /// Φ = (A_a v')·(r_b − r_a) − f with v' fixed in body a (1 row). Body a rigid or the ground, b
 /// rigid, a point mass or the ground (finalize).
 inline void dot_row(const Workspace& ws, const PointRef& a, const PointRef& b, const Vec2& v_body,

@@ -1,4 +1,6 @@
-// Fixed joint (weld): r_a = r_b and φ_b − φ_a = angle0, 3 rows.
+// Fixed joint (weld): r_a = r_b and φ_b − φ_a = angle0, 3 rows. With a flexible link on one side
+// (a clamped end) the angle row keeps the link's slope at the point parallel to a direction fixed
+// in the other body (slope_row).
 #include "core/elements/constraint_rows.hpp"
 
 namespace lash::fixed_joint {
@@ -8,7 +10,10 @@ int rows(const Model&, const Joint&) { return 3; }
 
 void constrain(const Model&, const Workspace& ws, const Joint& j, int row, ConstraintOut& out) {
   revolute_rows(ws, j.a, j.b, row, out);
-  angle_row(ws, j.a.body, j.b.body, j.angle0, 0, 0, 0, row + 2, out);
+  if (ws.kin_of(j.a.body).mesh || ws.kin_of(j.b.body).mesh)
+    slope_row(ws, j.a, j.b, j.angle0, row + 2, out);
+  else
+    angle_row(ws, j.a.body, j.b.body, j.angle0, 0, 0, 0, row + 2, out);
 }
 
 void channels(const Model&, const Workspace& ws, const Joint&, int row, ChannelSink& s) {
