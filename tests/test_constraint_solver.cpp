@@ -1,6 +1,7 @@
 // The sparse constraint solver against a dense solve of the same system, and the redundancy
 // handling of assembly.
 #include <Eigen/Cholesky>
+#include <algorithm>
 #include <Eigen/Dense>
 #include <filesystem>
 
@@ -25,7 +26,7 @@ std::vector<std::string> example_files() {
 struct DenseSolve {
   Eigen::VectorXd lambda, qdd;  // lambda over all rows (0 on dropped ones)
 };
-DenseSolve dense_solve(const Workspace& ws, double epsilon) {
+DenseSolve dense_solve(const Workspace& ws, double factor) {
   const std::vector<int>& active = ws.solver->active;
   const int ma = static_cast<int>(active.size());
   Eigen::MatrixXd phi(ma, ws.nq);
@@ -35,8 +36,9 @@ DenseSolve dense_solve(const Workspace& ws, double epsilon) {
     rhs[a] = ws.rhs_m[active[a]];
   }
   const Eigen::MatrixXd minv = mass_matrix(ws).inverse();
-  const Eigen::MatrixXd w =
-      phi * minv * phi.transpose() + epsilon * Eigen::MatrixXd::Identity(ma, ma);
+  Eigen::VectorXd reg(ma);
+  for (int a = 0; a < ma; ++a) reg[a] = factor * ws.solver->regularisation[a];
+  const Eigen::MatrixXd w = phi * minv * phi.transpose() + Eigen::MatrixXd(reg.asDiagonal());
   rhs -= phi * minv * ws.g;
   const Eigen::VectorXd la = w.ldlt().solve(rhs);
   DenseSolve d;
@@ -55,24 +57,34 @@ double rel_diff(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
 class Compare : public Observer {
  public:
   void output(double, const Eigen::VectorXd&, const Workspace& ws) override {
-    const DenseSolve d = dense_solve(ws, ws.solver->epsilon);
+    const DenseSolve d = dense_solve(ws, 1.0);
     lambda = std::max(lambda, rel_diff(ws.lambda, d.lambda));
     qdd = std::max(qdd, rel_diff(ws.qdd, d.qdd));
-    // Without the regularisation: within the bound ε/σ_min(W) of constraint_solver.hpp (relative
-    // to |λ|), with room for round-off.
+    // The sparse solution's own residual: M q̈ − g − Φ_qᵀλ, relative to the forces.
+    const Eigen::VectorXd forces = ws.g + ws.phi_q.transpose() * ws.lambda;
+    residual = std::max(residual, (mass_matrix(ws) * ws.qdd - forces).cwiseAbs().maxCoeff() /
+                                      forces.cwiseAbs().maxCoeff());
+    // Without the regularisation: within the bound of constraint_solver.hpp, kRegularisation /
+    // σ_min(Ŵ) with Ŵ = D^{-1/2} W D^{-1/2}, D = diag(W) at assembly, in the D-weighted norm; in
+    // the Euclidean norm times √(max D / min D). Relative to |λ|, with room for round-off.
     const DenseSolve exact = dense_solve(ws, 0.0);
-    Eigen::MatrixXd phi(ws.solver->active.size(), ws.nq);
-    for (size_t a = 0; a < ws.solver->active.size(); ++a) phi.row(a) = ws.phi_q.row(ws.solver->active[a]);
+    const int ma = static_cast<int>(ws.solver->active.size());
+    Eigen::MatrixXd phi(ma, ws.nq);
+    for (int a = 0; a < ma; ++a) phi.row(a) = ws.phi_q.row(ws.solver->active[a]);
+    const Eigen::MatrixXd w = phi * mass_matrix(ws).inverse() * phi.transpose();
+    const Eigen::VectorXd wd = Eigen::Map<const Eigen::VectorXd>(ws.solver->w_diag.data(), ma);
+    const Eigen::VectorXd root = wd.cwiseSqrt().cwiseInverse();
     const Eigen::VectorXd ev =
-        Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(phi * mass_matrix(ws).inverse() * phi.transpose())
+        Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(root.asDiagonal() * w * root.asDiagonal())
             .eigenvalues();
-    const double bound = ws.solver->epsilon / ev[0];
+    const double bound = kRegularisation / ev[0] * std::sqrt(wd.maxCoeff() / wd.minCoeff());
     const double err = (ws.lambda - exact.lambda).norm() / exact.lambda.norm();
     bound_ratio = std::max(bound_ratio, err / (bound + 1e-13));
+    lambda_error = std::max(lambda_error, err);
     condition = std::max(condition, ev[ev.size() - 1] / ev[0]);
     ++outputs;
   }
-  double lambda = 0, qdd = 0, bound_ratio = 0, condition = 0;
+  double lambda = 0, qdd = 0, bound_ratio = 0, condition = 0, lambda_error = 0, residual = 0;
   int outputs = 0;
 };
 
@@ -94,10 +106,19 @@ TEST(ConstraintSolver, SparseAndDenseFactorisationsAgreeOnEveryExample) {
     ASSERT_TRUE(r.status.ok) << r.status.message;
     EXPECT_EQ(c.outputs, 21);
     EXPECT_LT(c.lambda, 1e-11);
-    EXPECT_LT(c.qdd, 1e-11);
     EXPECT_LT(c.bound_ratio, 1.0);
-    EXPECT_LT(c.condition, 1e5);  // so the regularisation's bound is below 1e-9 (constraint_solver.hpp)
     EXPECT_EQ(ws.solver->regularised, 0);
+    std::printf("%s: cond(Ŵ) %.3g, |λ − λ_exact|/|λ| %.3g\n", f.c_str(), c.condition,
+                c.lambda_error);
+    EXPECT_LT(c.condition, 1e5);  // so the regularisation's bound is below 1e-9 (constraint_solver.hpp)
+    EXPECT_LT(c.lambda_error, 1e-11);
+    EXPECT_LT(c.residual, 1e-12);
+    // The dense reference inverts M outright: exact for diagonal blocks; a flexible link's
+    // slope coordinates carry little mass (ρA l³/105 per element: cond(M) 1e9 with the 4.5 g
+    // pivot of erkaya_compliant_beam.yaml), which costs the dense q̈ its last digits.
+    const bool flexible =
+        std::any_of(m.bodies.begin(), m.bodies.end(), [](const Body& b) { return b.flexible(); });
+    EXPECT_LT(c.qdd, flexible ? 1e-7 : 1e-11);
   }
 }
 

@@ -143,12 +143,13 @@ static void build_solver(const Model& model, Workspace& ws, const Eigen::MatrixX
 
   // The regularisation's scale: the largest diagonal entry of W.
   // (M⁻¹ approximated by the inverse of its diagonal, exact but for flexible links).
-  s->scale = 0.0;
   const Eigen::RowVectorXd diag_inverse = ws.mass_diag.cwiseInverse().transpose();
-  for (int a = 0; a < ma; ++a)
-    s->scale = std::max(s->scale, phi_q.row(s->active[a]).cwiseAbs2().dot(diag_inverse));
-  if (!(s->scale > 0.0)) s->scale = 1.0;
-  s->epsilon = kRegularisation * s->scale;
+  for (int a = 0; a < ma; ++a) {
+    double w = phi_q.row(s->active[a]).cwiseAbs2().dot(diag_inverse);
+    if (!(w > 0.0)) w = 1.0;
+    s->w_diag.push_back(w);
+    s->regularisation.push_back(kRegularisation * w);
+  }
 
   // Body order: approximate minimum degree on the graph of bodies coupled by a row.
   const int nb = ws.nb;
@@ -288,11 +289,11 @@ void prepare_constraint_solver(const Model& model, Workspace& ws, const Eigen::M
   for (int a = 0; a < ma; ++a) {
     for (int e = s.phi_begin[a]; e < s.phi_begin[a + 1]; ++e)
       v[s.phi_slot[e]] = phi_q(s.active[a], s.phi_col[e]);
-    v[s.slot_reg[a]] = -s.epsilon;
+    v[s.slot_reg[a]] = -s.regularisation[a];
   }
   s.ldlt.factorize_in_place(s.k);
   bool ok = s.ldlt.info() == Eigen::Success;
-  for (int a = 0; a < ma && ok; ++a) ok = -s.ldlt.diagonal()[s.pos[nq + a]] > 1e-10 * s.scale;
+  for (int a = 0; a < ma && ok; ++a) ok = -s.ldlt.diagonal()[s.pos[nq + a]] > 1e-10 * s.w_diag[a];
   if (!ok) {
     const std::vector<std::string> warnings = ws.warnings;
     build_solver(model, ws, phi_q, true);
@@ -312,14 +313,14 @@ bool solve_constraints(Workspace& ws) {
   for (int k = 0; k < nq; ++k) s.b[s.pos[k]] = ws.g[k];
   // Factor; a pivot of the wrong sign (the quasi-definite inertia lost to round-off: W singular
   // to working precision) repeats it with a larger ε.
-  double eps = s.epsilon;
+  double factor = 1.0;
   bool ok = false;
   for (int attempt = 0; attempt <= kRegularisationSteps && !ok; ++attempt) {
     if (attempt > 0) {
-      eps *= kRegularisationGrowth;
+      factor *= kRegularisationGrowth;
       ++s.regularised;
     }
-    for (int a = 0; a < ma; ++a) v[s.slot_reg[a]] = -eps;
+    for (int a = 0; a < ma; ++a) v[s.slot_reg[a]] = -factor * s.regularisation[a];
     s.ldlt.factorize_in_place(s.k);
     ok = s.ldlt.info() == Eigen::Success;
     if (!ok) continue;

@@ -5,9 +5,10 @@
 /// rows Φ_q (redundant rows dropped at assembly), it solves the augmented system
 ///
 ///     [ M    Φ_qᵀ ] [  q̈ ]   [ g  ]
-///     [ Φ_q  −εI  ] [ −λ ] = [ γ_B ],
+///     [ Φ_q  −εD  ] [ −λ ] = [ γ_B ],
 ///
-/// i.e. M q̈ = g + Φ_qᵀ λ with (W + εI) λ = γ_B − Φ_q M⁻¹ g, W = Φ_q M⁻¹ Φ_qᵀ. The matrix is
+/// i.e. M q̈ = g + Φ_qᵀ λ with (W + εD) λ = γ_B − Φ_q M⁻¹ g, W = Φ_q M⁻¹ Φ_qᵀ, D = diag(W) at
+/// assembly. The matrix is
 /// quasi-definite for every ε > 0 (M positive definite), so it has an LDLᵀ factorisation in any
 /// symmetric order, also where Φ_q loses rank (singular positions): there λ is the damped
 /// least-squares solution. The factorisation is Eigen's SimplicialLDLT (sparse, no pivoting) in
@@ -34,11 +35,13 @@ struct Workspace;
 /// fraction of its norm.
 inline constexpr double kRedundancyTolerance = 1e-8;
 
-/// The regularisation ε of the augmented system, relative to the largest diagonal entry of
-/// W = Φ_q M⁻¹ Φ_qᵀ at assembly (about 100 units of round-off of that entry, so that no
-/// pivot changes sign by round-off). It changes λ by at most ε/σ_min(W) relative (σ_min: the
-/// smallest eigenvalue of W): 1e-14 times W's condition number, below 1e-9 for any W whose
-/// condition number is below 1e5 (the examples: 1e4, from mixing 1/mass and 1/inertia).
+/// The regularisation of the augmented system: row a gets ε_a = kRegularisation · W_aa, its own
+/// diagonal entry of W = Φ_q M⁻¹ Φ_qᵀ at assembly (about 100 units of round-off of that entry,
+/// so that no pivot changes sign by round-off), i.e. εD with D = diag(W). It changes λ by at most
+/// kRegularisation/σ_min(Ŵ) relative in the D-weighted norm, Ŵ = D^{-1/2} W D^{-1/2} (unit
+/// diagonal): scaling each row by its own entry keeps bodies of very different mass (a 4.5 g
+/// flexible pivot beside 1 kg links: cond(W) 1.5e9, cond(Ŵ) far less) from raising the error of
+/// the heavy bodies' reactions. Below 1e-9 for any Ŵ whose condition number is below 1e5.
 inline constexpr double kRegularisation = 1e-14;
 
 /// A factorisation that breaks down (a pivot of the wrong sign: W singular to working
@@ -64,8 +67,9 @@ struct ConstraintSolver {
   std::vector<int> slot_reg;    ///< per active row: its −ε entry in k.valuePtr()
   std::vector<int> phi_begin;   ///< per active row: its range in phi_col / phi_slot
   std::vector<int> phi_col, phi_slot;  ///< Φ_q entries: coordinate and slot in k.valuePtr()
-  double scale = 1.0;           ///< largest diagonal entry of W at assembly (1/kg, or m²/kg·m²)
-  double epsilon = 0.0;         ///< the regularisation in use
+  std::vector<double> w_diag;   ///< per active row: W_aa at assembly (M⁻¹ by its diagonal)
+  /// Per active row: its base regularisation ε_a = kRegularisation · W_aa.
+  std::vector<double> regularisation;
   Ldlt ldlt;
   Eigen::VectorXd b, x;         ///< right-hand side and solution, in elimination order
   long regularised = 0;         ///< solves that needed more than the base regularisation
