@@ -221,6 +221,7 @@ TEST(ModelLoader, ExamplesLoad) {
       "amiri_slider_crank.yaml", "amiri_slider_crank_absorbers.yaml", "amiri_four_bar.yaml",
       "amiri_four_bar_absorbers.yaml", "erkaya_articulated.yaml", "erkaya_compliant.yaml",
       "erkaya_compliant_beam.yaml", "breaker_linkage_flexible.yaml",
+      "press_slider_crank_flexible_rod.yaml",
       "breaker_linkage.yaml"};
   for (const auto& name : names)
     EXPECT_NO_THROW(load_model_file(lash::test::example_path(name))) << name;
