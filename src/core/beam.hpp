@@ -1,8 +1,8 @@
 #pragma once
 /// @file beam.hpp
 /// The planar Euler–Bernoulli beam in the absolute nodal coordinate formulation (ANCF): the
-/// mathematics of a flexible link, independent of the mechanism engine (not yet a body kind:
-/// docs/architecture.md, "Flexible links").
+/// mathematics of a flexible link, independent of the mechanism engine (the body kind built on it
+/// is core/elements/flexible_link.cpp; docs/architecture.md, "Flexible links").
 ///
 /// Each node carries its world position r and slope ∂r/∂x (4 coordinates [rx, ry, r'x, r'y]);
 /// an element of length l interpolates them with the cubic Hermite polynomials of ξ = x/l ∈ [0, 1]
