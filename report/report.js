@@ -395,6 +395,21 @@
       [j.a, j.b].forEach((e) => { if (e) blockRadius[e.body] = Math.max(blockRadius[e.body] || 0, r); });
     });
     const pose = (name, k) => (F.bodies[name] ? F.bodies[name][k] : null);
+    // Flexible links: drawn as a parabola through their ends, bent by their mid-length deflection
+    // from the chord, magnified so that the largest one shows as a tenth of the link's length.
+    const flexDefl = F.deflection || {};
+    const flexible = {};
+    let flexMag = 0;
+    {
+      let ratio = 0;
+      bodies.forEach((b) => {
+        const w = flexDefl[b.name];
+        if (!b.flexible || !Array.isArray(w) || w.length !== nFrames || !(b.flexible.length > 0)) return;
+        flexible[b.name] = {length: b.flexible.length, w: w};
+        w.forEach((v) => { if (isFinite(v)) ratio = Math.max(ratio, Math.abs(v) / b.flexible.length); });
+      });
+      if (ratio > 0) flexMag = Math.max(1, 0.1 / ratio);
+    }
     const world = (q, p) => {
       const c = Math.cos(q[2]), sn = Math.sin(q[2]);
       return [q[0] + c * p[0] - sn * p[1], q[1] + sn * p[0] + c * p[1]];
@@ -441,7 +456,9 @@
     const tEnd = F.time[nFrames - 1];
     mainCol.append(el('div', {class: 'legend-note',
       text: nFrames + ' frames over ' + fmt(tEnd * 1e3) + ' ms; 1× plays 60 frames per second. ' +
-            'Bodies through their markers; circles at clearance joints are the bearing and journal at true size.'}));
+            'Bodies through their markers; circles at clearance joints are the bearing and journal at true size.' +
+            (flexMag > 0 ? ' Flexible links bent by their mid-length deflection, magnified ×' + fmt(flexMag) +
+             ' (a parabola through their ends).' : '')}));
     layout.append(mainCol);
 
     // Clearance insets.
@@ -549,7 +566,14 @@
         const color = bodyColor[b.name];
         const pts = markers[b.name].map((p) => world(q, p));
         g.save();
-        if (pts.length >= 3) {
+        if (flexible[b.name]) {
+          // Ends A and B on the chord, control point 2w·mag off its middle (the parabola's
+          // mid-point then lies w·mag off the chord).
+          const fl = flexible[b.name], h = fl.length / 2, w = fl.w[k] * flexMag;
+          const a = world(q, [-h, 0]), e = world(q, [h, 0]), c = world(q, [0, 2 * w]);
+          g.strokeStyle = color; g.lineWidth = 9; g.globalAlpha = 0.85;
+          g.beginPath(); g.moveTo(X(a), Y(a)); g.quadraticCurveTo(X(c), Y(c), X(e), Y(e)); g.stroke();
+        } else if (pts.length >= 3) {
           const hull = convexHull(pts);
           g.beginPath(); hull.forEach((p, i) => (i ? g.lineTo(X(p), Y(p)) : g.moveTo(X(p), Y(p)))); g.closePath();
           g.fillStyle = color + '55'; g.strokeStyle = color; g.lineWidth = 2.5; g.fill(); g.stroke();

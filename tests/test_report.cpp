@@ -134,6 +134,30 @@ TEST(Report, FloresExampleDataIsCompleteAndConsistent) {
                                                     {"x": "rod_slider.delta", "y": "rod_slider.delta_dot"}])"));
 }
 
+TEST(Report, AFlexibleLinkCarriesItsDeflectionIntoTheAnimation) {
+  AnalysisOptions o;
+  o.ideal_twin = false;
+  o.lyapunov = false;
+  const Report r = report(read_file(example_path("flores_slider_crank_flexible_rod.yaml")),
+                          {"solver.end_time=0.006"}, o);
+  ASSERT_TRUE(r.run.result.status.ok);
+  const auto& d = r.data;
+  json rod;
+  for (const auto& b : d["model"]["bodies"])
+    if (b["name"] == "rod") rod = b;
+  ASSERT_TRUE(rod.contains("flexible"));
+  EXPECT_DOUBLE_EQ(rod["flexible"]["length"].get<double>(), 0.12);
+  EXPECT_EQ(rod["flexible"]["elements"].get<int>(), 4);
+  const auto& w = d["frames"]["deflection"]["rod"];
+  ASSERT_EQ(w.size(), d["frames"]["time"].size());
+  // The frames' deflection is the channel's at the frame times (six digits), and it moves.
+  double largest = 0.0;
+  for (const auto& v : w) largest = std::max(largest, std::abs(v.get<double>()));
+  EXPECT_GT(largest, 1e-7);
+  EXPECT_LT(largest, 1e-3);
+  EXPECT_FALSE(d["frames"]["deflection"].contains("crank"));  // rigid bodies have none
+}
+
 TEST(Report, RoundingAndWhatIsMissing) {
   // A hand-made result: the document rounds series to six digits, keeps statistics exact, and
   // writes null for what was not computed.

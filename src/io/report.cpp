@@ -40,7 +40,11 @@ json model_json(const Model& m) {
   for (const auto& b : m.bodies) {
     json mk = json::object();
     for (const auto& x : b.markers) mk[x.name] = {x.s_P_B.x(), x.s_P_B.y()};
-    j["bodies"].push_back({{"name", b.name}, {"mass", b.mass}, {"inertia", b.inertia}, {"markers", mk}});
+    json body = {{"name", b.name}, {"mass", b.mass}, {"inertia", b.inertia}, {"markers", mk}};
+    if (b.flexible())
+      body["flexible"] = {{"length", b.mesh.length}, {"elements", b.mesh.elements},
+                          {"youngs_modulus", b.mesh.section.youngs_modulus}};
+    j["bodies"].push_back(body);
   }
   // Ground points used by joints and loads (the ground has no marker list in the Model).
   json gm = json::object();
@@ -206,6 +210,13 @@ json report_data(const Model& model, const RunAnalysis& a) {
   }
   frames["bodies"] = fb;
   frames["clearance"] = fc;
+  // Flexible links: their mid-length deflection from the chord, per frame (the page draws them
+  // bent by it, magnified).
+  json fd = json::object();
+  for (size_t b = 0; b < a.frames.deflection.size() && b < a.frames.bodies.size(); ++b)
+    if (!a.frames.deflection[b].empty())
+      fd[a.frames.bodies[b]] = r6(a.frames.deflection[b]);
+  frames["deflection"] = fd;
   d["frames"] = frames;
 
   // Statistics and the comparison with the ideal twin.

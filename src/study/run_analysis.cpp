@@ -171,6 +171,9 @@ class SampleAnalysis {
       if (q[0] < 0 || q[1] < 0 || (q[2] < 0 && b.rotates())) missing_pose.push_back(b.name);
     }
     poses.resize(m.bodies.size());
+    deflections.resize(m.bodies.size());
+    for (const auto& b : m.bodies)
+      deflection_index.push_back(b.flexible() ? index(b.name + ".deflection") : -1);
     for (int c = 0; c < nc; ++c) {
       const std::string& n = m.joints[clearance_joints[c]].name;
       ecc_index.push_back({index(n + ".ex"), index(n + ".ey")});
@@ -205,6 +208,7 @@ class SampleAnalysis {
       for (size_t b = 0; b < pose_index.size(); ++b) {
         const auto& p = pose_index[b];
         poses[b].push_back({v[p[0]], v[p[1]], p[2] >= 0 ? v[p[2]] : 0.0});
+        if (deflection_index[b] >= 0) deflections[b].push_back(v[deflection_index[b]]);
       }
       for (size_t c = 0; c < ecc_index.size(); ++c) eccentricity[c].push_back(ecc(c, v));
     }
@@ -239,6 +243,8 @@ class SampleAnalysis {
   std::vector<double> angle;  ///< the period driver's angle at every output, deg
   std::vector<double> frame_t;
   std::vector<std::vector<std::array<double, 3>>> poses;
+  std::vector<std::vector<double>> deflections;  ///< per body: flexible links' mid deflection
+  std::vector<int> deflection_index;             ///< column of `<body>.deflection`, or −1
   std::vector<std::vector<Vec2>> eccentricity;
   std::vector<std::vector<Vec2>> orbit;
   std::vector<JointEvents> events;
@@ -775,6 +781,8 @@ RunAnalysis analyze_samples(const Model& model, const AnalysisOptions& o, Plan& 
   out.frames.time = std::move(sa.frame_t);
   for (const auto& b : model.bodies) out.frames.bodies.push_back(b.name);
   out.frames.pose = std::move(sa.poses);
+  out.frames.deflection = std::move(sa.deflections);
+  for (const auto& b : model.bodies) out.frames.length.push_back(b.flexible() ? b.mesh.length : 0.0);
   for (int j : p.clearance_joints) out.frames.clearance_joints.push_back(model.joints[j].name);
   out.frames.eccentricity = std::move(sa.eccentricity);
 

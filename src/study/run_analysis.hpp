@@ -122,6 +122,10 @@ struct AnimationFrames {
   std::vector<std::vector<std::array<double, 3>>> pose;  ///< pose[body][frame] = x, y (m), φ (rad)
   std::vector<std::string> clearance_joints;             ///< clearance joint names
   std::vector<std::vector<Vec2>> eccentricity;           ///< eccentricity[joint][frame], m
+  /// Flexible links only (empty for other bodies): deflection[body][frame] at mid-length from the
+  /// chord (m, the `<body>.deflection` channel) and the link's length (m; 0 for other bodies).
+  std::vector<std::vector<double>> deflection;
+  std::vector<double> length;
 };
 
 /// One clearance joint's section points: its eccentricity (ex, ey) at every section.
