@@ -89,14 +89,15 @@ Section rectangle(double width_m, double height_m, double youngs_modulus, double
 }
 
 Mat28 shape(double xi, double l) {
-  const double x2 = xi * xi, x3 = x2 * xi;
-  return expand(1 - 3 * x2 + 2 * x3, l * (xi - 2 * x2 + x3), 3 * x2 - 2 * x3, l * (x3 - x2));
+  double n[4], dn[4];
+  hermite(xi, l, n, dn);
+  return expand(n[0], n[1], n[2], n[3]);
 }
 
 Mat28 shape_x(double xi, double l) {
-  const double x2 = xi * xi;
-  return expand((-6 * xi + 6 * x2) / l, 1 - 4 * xi + 3 * x2, (6 * xi - 6 * x2) / l,
-                3 * x2 - 2 * xi);
+  double n[4], dn[4];
+  hermite(xi, l, n, dn);
+  return expand(dn[0], dn[1], dn[2], dn[3]);
 }
 
 Mat28 shape_xx(double xi, double l) {

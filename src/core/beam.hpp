@@ -51,6 +51,17 @@ struct Mesh {
   int coordinates() const { return kNodeCoordinates * nodes(); }
 };
 
+/// The four Hermite shape functions s1…s4 at ξ (S = [s1 I, s2 I, s3 I, s4 I]) and their
+/// x-derivatives, for an element of length l. Inline: the engine evaluates them at every joint
+/// point of a flexible link in every right-hand side.
+inline void hermite(double xi, double l, double n[4], double dn[4]) {
+  const double x2 = xi * xi, x3 = x2 * xi;
+  n[0] = 1 - 3 * x2 + 2 * x3, n[1] = l * (xi - 2 * x2 + x3), n[2] = 3 * x2 - 2 * x3,
+  n[3] = l * (x3 - x2);
+  dn[0] = (-6 * xi + 6 * x2) / l, dn[1] = 1 - 4 * xi + 3 * x2, dn[2] = (6 * xi - 6 * x2) / l,
+  dn[3] = 3 * x2 - 2 * xi;
+}
+
 /// S(ξ) (2×8) and its x-derivatives S' and S'' for an element of length l.
 Mat28 shape(double xi, double l);
 Mat28 shape_x(double xi, double l);

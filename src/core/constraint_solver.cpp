@@ -141,8 +141,8 @@ static void build_solver(const Model& model, Workspace& ws, const Eigen::MatrixX
   }
   const int ma = static_cast<int>(s->active.size());
 
-  // The regularisation's scale: the largest diagonal entry of W.
-  // (M⁻¹ approximated by the inverse of its diagonal, exact but for flexible links).
+  // The regularisation: each row's own diagonal entry of W (constraint_solver.hpp), with M⁻¹
+  // taken by the inverse of its diagonal (exact but for flexible links).
   const Eigen::RowVectorXd diag_inverse = ws.mass_diag.cwiseInverse().transpose();
   for (int a = 0; a < ma; ++a) {
     double w = phi_q.row(s->active[a]).cwiseAbs2().dot(diag_inverse);

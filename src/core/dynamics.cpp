@@ -337,10 +337,12 @@ bool evaluate(const Model& model, Workspace& ws, double t, const double* y, doub
   ws.kinetic = ws.potential = ws.dissipated_power = ws.input_power = 0.0;
   for (int b = 0; b < ws.nb; ++b) {
     const Body& body = model.bodies[b];
-    const BodyKind& kind = kind_of(body);
-    kind.forces(model, body, ws.kin[b], ws);
-    ws.kinetic += kind.kinetic_energy(body, ws.kin[b]);
+    kind_of(body).forces(model, body, ws.kin[b], ws);
   }
+  // Kinetic energy ½ q̇ᵀ M q̇ from the constant mass matrix (every kind's block).
+  const Eigen::Map<const Eigen::VectorXd> q_dot(y + nq, nq);
+  ws.kinetic = 0.5 * q_dot.cwiseAbs2().dot(ws.mass_diag);
+  for (const auto& e : ws.mass_coupling) ws.kinetic += e.value * q_dot[e.i] * q_dot[e.j];
   for (size_t li = 0; li < model.loads.size(); ++li) {
     const Load& l = model.loads[li];
     kind_of(l).apply(model, ws, l, static_cast<int>(li));

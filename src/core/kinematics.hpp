@@ -5,8 +5,6 @@
 /// engine knows about it. Rigid bodies have [x, y, φ], point masses [x, y], flexible links
 /// [rx, ry, r'x, r'y] per node; the ground has none.
 #include <Eigen/Core>
-#include <algorithm>
-#include <cmath>
 
 #include "core/beam.hpp"
 #include "core/math.hpp"
@@ -77,18 +75,13 @@ inline PointKin point_kin(const BodyKin& k, const Vec2& s_body) {
     p.a_vel = -k.omega * k.omega * p.s;
     return p;
   }
-  const beam::Mesh& m = *k.mesh;
-  const double l = m.element_length(), x = 0.5 * m.length + s_body.x();
-  const int el = std::clamp(static_cast<int>(std::floor(x / l)), 0, m.elements - 1);
-  const double xi = x / l - el, x2 = xi * xi, x3 = x2 * xi;
+  // The marker lies on the axis (finalize checks it), so locate does not throw.
+  const beam::Location at = beam::locate(*k.mesh, 0.5 * k.mesh->length + s_body.x());
   p.beam = true;
-  p.offset = k.block.offset + beam::kNodeCoordinates * el;
-  p.n[0] = 1 - 3 * x2 + 2 * x3, p.n[1] = l * (xi - 2 * x2 + x3);
-  p.n[2] = 3 * x2 - 2 * x3, p.n[3] = l * (x3 - x2);
-  p.dn[0] = (-6 * xi + 6 * x2) / l, p.dn[1] = 1 - 4 * xi + 3 * x2;
-  p.dn[2] = (6 * xi - 6 * x2) / l, p.dn[3] = 3 * x2 - 2 * xi;
-  const double* q = k.q + beam::kNodeCoordinates * el;
-  const double* qd = k.qd + beam::kNodeCoordinates * el;
+  p.offset = k.block.offset + beam::kNodeCoordinates * at.element;
+  beam::hermite(at.xi, k.mesh->element_length(), p.n, p.dn);
+  const double* q = k.q + beam::kNodeCoordinates * at.element;
+  const double* qd = k.qd + beam::kNodeCoordinates * at.element;
   p.r = p.v = p.slope = Vec2::Zero();
   Vec2& slope_rate = p.slope_rate;
   for (int i = 0; i < 4; ++i) {

@@ -1,8 +1,8 @@
 // Flexible link: a planar Euler–Bernoulli beam in the absolute nodal coordinate formulation
 // (core/beam.hpp; docs/architecture.md, "Flexible links"). Coordinates: [rx, ry, r'x, r'y] per
 // node from end A to end B; mass block: the constant, banded ∫ρA SᵀS dx; its own forces: the
-// elastic and Kelvin–Voigt damping forces of each element and gravity ∫ρA Sᵀg dx; kinetic
-// energy ½ q̇ᵀ M q̇. Its pose channels (x, y, phi, …) are those of the chord from A to B.
+// elastic and Kelvin–Voigt damping forces of each element and gravity ∫ρA Sᵀg dx. Its pose
+// channels (x, y, phi, …) are those of the chord from A to B.
 #include <cmath>
 
 #include "core/elements/registry.hpp"
@@ -50,16 +50,6 @@ void forces(const Model& model, const Body& b, const BodyKin& k, Workspace& ws) 
   ws.dissipated_power += dissipation;
 }
 
-double kinetic_energy(const Body& b, const BodyKin& k) {
-  const beam::Mat8 me = beam::element_mass(b.mesh.section, b.mesh.element_length());
-  double t = 0.0;
-  for (int e = 0; e < b.mesh.elements; ++e) {
-    const Eigen::Map<const beam::Vec8> qd(k.qd + kN * e);
-    t += 0.5 * qd.dot(me * qd);
-  }
-  return t;
-}
-
 void channels(const Body& b, const BodyKin& k, const double* qdd, ChannelSink& s) {
   const beam::Mesh& m = b.mesh;
   const int last = kN * m.elements;
@@ -100,6 +90,6 @@ void channels(const Body& b, const BodyKin& k, const double* qdd, ChannelSink& s
 
 }  // namespace
 
-const BodyKind kKind{"flexible", coordinates, mass, initial, forces, kinetic_energy, channels};
+const BodyKind kKind{"flexible", coordinates, mass, initial, forces, channels};
 
 }  // namespace lash::flexible_link

@@ -1,5 +1,4 @@
-// Point mass: coordinates [x, y], no orientation; mass block diag(m, m); gravity m g; kinetic
-// energy ½ m |v|². A body given without `inertia` (absorber masses, pistons, pendulum bobs).
+// Point mass: coordinates [x, y], no orientation; mass block diag(m, m); gravity m g. A body given without `inertia` (absorber masses, pistons, pendulum bobs).
 #include "core/elements/registry.hpp"
 
 namespace lash::point_mass {
@@ -14,8 +13,6 @@ void initial(const Body& b, double* q, double* qd) {
   if (qd) qd[0] = b.v0.x(), qd[1] = b.v0.y();
 }
 
-double kinetic_energy(const Body& b, const BodyKin& k) { return 0.5 * b.mass * k.v.squaredNorm(); }
-
 void channels(const Body&, const BodyKin& k, const double* qdd, ChannelSink& s) {
   s.add("x", "m", "x position", k.r.x());
   s.add("y", "m", "y position", k.r.y());
@@ -27,7 +24,6 @@ void channels(const Body&, const BodyKin& k, const double* qdd, ChannelSink& s) 
 
 }  // namespace
 
-const BodyKind kKind{"point_mass", coordinates, mass, initial, point_gravity, kinetic_energy,
-                     channels};
+const BodyKind kKind{"point_mass", coordinates, mass, initial, point_gravity, channels};
 
 }  // namespace lash::point_mass

@@ -67,7 +67,6 @@ struct BodyKind {
   /// Adds the body's own generalised forces (gravity; a flexible link's elastic and damping
   /// forces) to ws.g and their energy to ws.potential / ws.dissipated_power.
   void (*forces)(const Model&, const Body&, const BodyKin&, Workspace&);
-  double (*kinetic_energy)(const Body&, const BodyKin&);
   /// Channels from the body's kinematics and its block of q̈.
   void (*channels)(const Body&, const BodyKin&, const double* qdd, ChannelSink&);
 };

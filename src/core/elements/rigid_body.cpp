@@ -1,5 +1,5 @@
 // Rigid body: coordinates [x, y, φ] of its centre of mass and orientation; mass block
-// diag(m, m, I); gravity m g at the centre of mass; kinetic energy ½ m |v|² + ½ I ω².
+// diag(m, m, I); gravity m g at the centre of mass.
 #include "core/elements/registry.hpp"
 
 namespace lash::rigid_body {
@@ -17,10 +17,6 @@ void initial(const Body& b, double* q, double* qd) {
   if (qd) qd[0] = b.v0.x(), qd[1] = b.v0.y(), qd[2] = b.omega0;
 }
 
-double kinetic_energy(const Body& b, const BodyKin& k) {
-  return 0.5 * (b.mass * k.v.squaredNorm() + b.inertia * k.omega * k.omega);
-}
-
 void channels(const Body&, const BodyKin& k, const double* qdd, ChannelSink& s) {
   s.add("x", "m", "x of the centre of mass", k.r.x());
   s.add("y", "m", "y of the centre of mass", k.r.y());
@@ -35,6 +31,6 @@ void channels(const Body&, const BodyKin& k, const double* qdd, ChannelSink& s) 
 
 }  // namespace
 
-const BodyKind kKind{"rigid", coordinates, mass, initial, point_gravity, kinetic_energy, channels};
+const BodyKind kKind{"rigid", coordinates, mass, initial, point_gravity, channels};
 
 }  // namespace lash::rigid_body
