@@ -16,14 +16,25 @@ A claims module is studies/claims/<study name>.py. It may define
   folder_claims(folder, runs) -> the same, for claims that need more of study.db than the
            metrics (the kept series: the breaker studies' stroke deviation); used instead of
            claims when defined;
-  FIGURES: a list of {"file", "title", "metric", "ylabel", "x", "series"}: one SVG line chart
-           each (written beside RESULTS.md and shown in it), the metric against the levels of
-           parameter "x", one line per level of parameter "series".
+  FIGURES: a list of SVG figures, each written beside RESULTS.md and shown in it, one of
+           {"file", "title", "metric", "ylabel", "x", "series"}: a run metric against the levels
+               of parameter "x", one line per level of parameter "series" (optional: one line);
+           {"kind": "sections", "file", "title", "channel", "x", "ylabel", "series"}: every
+               kept section value of `channel` against the numeric parameter "x", dots, one
+               colour per level of "series" (optional) — a bifurcation diagram;
+           {"kind": "section_map", "file", "title", "x_channel", "y_channel", "series",
+               "xlabel", "ylabel"}: the kept section values of two channels against each other
+               (a Poincaré map), dots, one colour per level of "series";
+           {"kind": "series", "file", "title", "channel", "series", "ylabel", "where"}: the kept
+               decimated time series of `channel`, one line per level of parameter "series",
+               only the runs whose parameters equal "where" ({name: level}, optional).
 Nothing in RESULTS.md is typed by hand: every number comes from study.db.
 Standard library only (sqlite3), so it runs wherever Python 3 does.
 """
 import argparse
 import importlib.util
+import json
+import math
 import os
 import sqlite3
 import sys
@@ -127,17 +138,126 @@ def line_chart_svg(title, xlabels, series, ylabel):
     return "\n".join(out) + "\n"
 
 
-def figure(spec, runs):
+def nice_ticks(lo, hi, n=5):
+    """About n round tick values covering [lo, hi]."""
+    if not (hi > lo):
+        hi = lo + (abs(lo) if lo else 1.0)
+    raw = (hi - lo) / n
+    mag = 10 ** math.floor(math.log10(raw))
+    step = next(m * mag for m in (1, 2, 2.5, 5, 10) if m * mag >= raw)
+    first = math.floor(lo / step) * step
+    ticks, k = [], 0
+    while first + k * step <= hi + 1e-9 * step:
+        ticks.append(first + k * step)
+        k += 1
+    return ticks
+
+
+def xy_chart_svg(title, xlabel, ylabel, datasets):
+    """A self-contained SVG on numeric axes: datasets are (name, xs, ys, "line" or "dots")."""
+    w, h, left, right, top, bottom = 760, 420, 80, 190, 40, 56
+    xs = [x for _, dx, _, _ in datasets for x in dx]
+    ys = [y for _, _, dy, _ in datasets for y in dy]
+    if not xs:
+        xs, ys = [0.0, 1.0], [0.0, 1.0]
+    xt, yt = nice_ticks(min(xs), max(xs)), nice_ticks(min(ys), max(ys))
+    x0, x1 = min(xt[0], min(xs)), max(xt[-1], max(xs))
+    y0, y1 = min(yt[0], min(ys)), max(yt[-1], max(ys))
+    if x1 <= x0:
+        x1 = x0 + 1.0
+    if y1 <= y0:
+        y1 = y0 + 1.0
+    px = lambda x: left + (w - left - right) * (x - x0) / (x1 - x0)
+    py = lambda y: top + (h - top - bottom) * (1 - (y - y0) / (y1 - y0))
+    out = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" '
+           f'font-family="sans-serif" font-size="12">',
+           f'<rect width="{w}" height="{h}" fill="white"/>',
+           f'<text x="{w / 2}" y="22" text-anchor="middle" font-size="14">{title}</text>',
+           f'<rect x="{left}" y="{top}" width="{w - left - right}" height="{h - top - bottom}" '
+           f'fill="none" stroke="black"/>',
+           f'<text transform="translate(16,{(top + h - bottom) / 2}) rotate(-90)" '
+           f'text-anchor="middle">{ylabel}</text>',
+           f'<text x="{(left + w - right) / 2}" y="{h - 12}" text-anchor="middle">{xlabel}</text>']
+    for v in yt:
+        out.append(f'<line x1="{left - 4}" y1="{py(v):.1f}" x2="{w - right}" y2="{py(v):.1f}" '
+                   f'stroke="#ddd"/><text x="{left - 6}" y="{py(v) + 4:.1f}" '
+                   f'text-anchor="end">{v:.4g}</text>')
+    for v in xt:
+        out.append(f'<line x1="{px(v):.1f}" y1="{h - bottom}" x2="{px(v):.1f}" y2="{h - bottom + 4}" '
+                   f'stroke="black"/><text x="{px(v):.1f}" y="{h - bottom + 18}" '
+                   f'text-anchor="middle">{v:.4g}</text>')
+    for n, (name, dx, dy, style) in enumerate(datasets):
+        c = PALETTE[n % len(PALETTE)]
+        pts = [(px(a), py(b)) for a, b in zip(dx, dy)]
+        if style == "line" and len(pts) > 1:
+            out.append('<polyline fill="none" stroke="%s" stroke-width="1.2" points="%s"/>'
+                       % (c, " ".join(f"{a:.1f},{b:.1f}" for a, b in pts)))
+        elif style == "dots":
+            out += [f'<circle cx="{a:.1f}" cy="{b:.1f}" r="1.3" fill="{c}"/>' for a, b in pts]
+        ly = top + 10 + 18 * n
+        out.append(f'<line x1="{w - right + 12}" y1="{ly}" x2="{w - right + 32}" y2="{ly}" '
+                   f'stroke="{c}" stroke-width="2"/><text x="{w - right + 38}" y="{ly + 4}">{name}</text>')
+    out.append("</svg>")
+    return "\n".join(out) + "\n"
+
+
+def read_table(folder, query, args=()):
+    db = sqlite3.connect(f"file:{os.path.join(folder, 'study.db')}?mode=ro", uri=True)
+    rows = list(db.execute(query, args))
+    db.close()
+    return rows
+
+
+def figure(spec, runs, folder):
     """The SVG text of one FIGURES entry."""
+    kind = spec.get("kind", "metric")
+    by_run = {r["run"]: r for r in runs if r["status"] == "completed"}
+    level = lambda r, p: str(r["params"][p]) if p else spec.get("channel", spec.get("metric", ""))
+    if kind == "sections":
+        groups = {}
+        for run, value in read_table(folder, "select run, value from sections where channel = ? "
+                                             "order by run, k", (spec["channel"],)):
+            if run in by_run:
+                r = by_run[run]
+                g = groups.setdefault(level(r, spec.get("series")), ([], []))
+                g[0].append(float(r["params"][spec["x"]]))
+                g[1].append(value)
+        return xy_chart_svg(spec["title"], spec["x"], spec["ylabel"],
+                            [(k, xs, ys, "dots") for k, (xs, ys) in groups.items()])
+    if kind == "section_map":
+        points = {}
+        for run, k, channel, value in read_table(
+                folder, "select run, k, channel, value from sections where channel in (?, ?)",
+                (spec["x_channel"], spec["y_channel"])):
+            if run in by_run:
+                points.setdefault((run, k), {})[channel] = value
+        groups = {}
+        for (run, _), p in sorted(points.items()):
+            if spec["x_channel"] in p and spec["y_channel"] in p:
+                g = groups.setdefault(level(by_run[run], spec.get("series")), ([], []))
+                g[0].append(p[spec["x_channel"]])
+                g[1].append(p[spec["y_channel"]])
+        return xy_chart_svg(spec["title"], spec["xlabel"], spec["ylabel"],
+                            [(k, xs, ys, "dots") for k, (xs, ys) in groups.items()])
+    if kind == "series":
+        where = {k: str(v) for k, v in spec.get("where", {}).items()}
+        datasets = []
+        for run, t, v in read_table(folder, "select run, time, value from series where channel = ? "
+                                            "order by run", (spec["channel"],)):
+            r = by_run.get(run)
+            if r is None or any(str(r["params"][k]) != v for k, v in where.items()):
+                continue
+            datasets.append((level(r, spec.get("series")), json.loads(t), json.loads(v), "line"))
+        return xy_chart_svg(spec["title"], "time (s)", spec["ylabel"], datasets)
     xs, ss = [], []
     for r in runs:
-        x, s = str(r["params"][spec["x"]]), str(r["params"][spec["series"]])
+        x, s = str(r["params"][spec["x"]]), level(r, spec.get("series"))
         if x not in xs:
             xs.append(x)
         if s not in ss:
             ss.append(s)
-    val = {(str(r["params"][spec["x"]]), str(r["params"][spec["series"]])): r["metrics"].get(spec["metric"])
-           for r in runs if r["status"] == "completed"}
+    val = {(str(r["params"][spec["x"]]), level(r, spec.get("series"))): r["metrics"].get(spec["metric"])
+           for r in by_run.values()}
     series = {s: [val.get((x, s)) for x in xs] for s in ss}
     return line_chart_svg(spec["title"], xs, series, spec["ylabel"])
 
@@ -165,7 +285,7 @@ def write(folder, copy_to=None):
     out += ["## Table", "", table(params, runs, columns), ""]
     svgs = {}
     for spec in getattr(module, "FIGURES", []) if module else []:
-        svgs[spec["file"]] = figure(spec, runs)
+        svgs[spec["file"]] = figure(spec, runs, folder)
         out += [f"![{spec['title']}]({spec['file']})", ""]
     if module and (hasattr(module, "folder_claims") or hasattr(module, "claims")):
         out += ["## Against the paper", ""]

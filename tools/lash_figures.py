@@ -28,7 +28,10 @@ is too long to read (more than MAX_REVOLUTIONS_ON_ANGLE_AXIS revolutions). The i
 drawn dashed grey wherever series.ideal has the channel. When the statistics were taken over a
 window narrower than the run (`lash report --window T0,T1`: analysis.statistics.*.window), the
 curves against the motion, the contact modes and the energy show that window only, so figures
-and statistics describe the same time.
+and statistics describe the same time. When they were taken over a crank-angle range as well
+(`--angle-range A0,A1`: analysis.statistics.*.angle_range), the curves against the motion are
+drawn against the crank angle folded into that range, every revolution of the window on top of
+the others ("the last revolutions in steady state"), whatever the number of revolutions.
 
 Each channel's unit and description come from report_data.json's channel_info, which the engine
 writes; the display scale (mm, kN, 10³ m/s²) is chosen from that unit. A channel that
@@ -228,26 +231,53 @@ def read_envelopes(csv_path, columns, t0, t1, buckets=ENVELOPE_BUCKETS):
 class XAxis:
     """The abscissa of curves against the motion: unwrapped crank angle (deg) or time."""
 
-    def __init__(self, time, angle_deg, window=None):
+    def __init__(self, time, angle_deg, window=None, angle_range=None):
         import numpy as np
         self.time = time
         self.window = window              # (t0, t1) s shown, or None: the whole run
+        self.fold = None                  # (a0, span) deg: angles folded into [a0, a0 + span]
         self.kind = "time"
         self.t_scale, self.t_label = time_unit(time)
         if angle_deg is not None and len(angle_deg) == len(time) and len(time) > 1 \
                 and np.all(np.isfinite(angle_deg)):
             unwrapped = np.degrees(np.unwrap(np.radians(angle_deg)))
             revolutions = abs(unwrapped[-1] - unwrapped[0]) / 360.0
-            if 0 < revolutions <= MAX_REVOLUTIONS_ON_ANGLE_AXIS and \
-                    len(time) >= MIN_SAMPLES_PER_REVOLUTION * revolutions:
+            if 0 < revolutions and len(time) >= MIN_SAMPLES_PER_REVOLUTION * revolutions and \
+                    (revolutions <= MAX_REVOLUTIONS_ON_ANGLE_AXIS or angle_range is not None):
                 self.kind, self.angle = "angle", unwrapped
+                if angle_range is not None:
+                    a0, a1 = angle_range
+                    span = (a1 - a0) % 360.0
+                    self.fold = (a0, span if span > 0 else 360.0)
 
     def of_time(self, t):
         """Abscissa values of times t (s)."""
         import numpy as np
         if self.kind == "angle":
-            return np.interp(t, self.time, self.angle)
+            a = np.interp(t, self.time, self.angle)
+            if self.fold is not None:
+                a = self.fold[0] + np.mod(a - self.fold[0], 360.0)
+            return a
         return np.asarray(t) * self.t_scale
+
+    def curve(self, t, *values):
+        """(x, values...) of samples at times t: the abscissa, and with a folded crank angle only
+        the samples inside the range, a NaN row where one revolution ends and the next begins
+        (so that no line joins them)."""
+        import numpy as np
+        x = self.of_time(t)
+        if self.fold is None:
+            return (x,) + values
+        a0, span = self.fold
+        inside = x <= a0 + span + 1e-9
+        x = np.where(inside, x, np.nan)
+        values = tuple(None if v is None else np.where(inside, v, np.nan) for v in values)
+        breaks = np.nonzero(np.diff(x) < 0)[0] + 1       # the angle fell back: a new revolution
+        if len(breaks):
+            x = np.insert(x, breaks, np.nan)
+            values = tuple(None if v is None else np.insert(v.astype(float), breaks, np.nan)
+                           for v in values)
+        return (x,) + values
 
     def label(self):
         return "Crank angle (°)" if self.kind == "angle" else self.t_label
@@ -258,6 +288,8 @@ class XAxis:
         from matplotlib.ticker import MultipleLocator
         ax.set_xlabel(self.label())
         x = self.of_time(np.asarray(self.window) if self.window else self.time[[0, -1]])
+        if self.fold is not None:
+            x = [self.fold[0], self.fold[0] + self.fold[1]]
         if self.kind == "angle":
             span = abs(x[1] - x[0])
             step = next((s for s in (45, 90, 180, 360, 720, 1440) if span / s <= 8), 1440)
@@ -299,7 +331,8 @@ class Report:
         self.analysis = data.get("analysis") if isinstance(data.get("analysis"), dict) else {}
         self.window = self._statistics_window()
         if self.time is not None:
-            self.xaxis = XAxis(self.time, as_array(series.get("crank_angle")), self.window)
+            self.xaxis = XAxis(self.time, as_array(series.get("crank_angle")), self.window,
+                               self._statistics_angle_range())
         self.model = data.get("model") if isinstance(data.get("model"), dict) else {}
         info = data.get("channel_info")
         self._info = info if isinstance(info, dict) else {}
@@ -318,6 +351,16 @@ class Report:
                 if t1 > t0 and (t0 - self.time[0] > 1e-9 * span or self.time[-1] - t1 > 1e-9 * span):
                     return (t0, t1)
                 return None
+        return None
+
+    def _statistics_angle_range(self):
+        """(a0, a1) deg of the statistics' crank-angle range, or None."""
+        stats = self.analysis.get("statistics")
+        for v in (stats.values() if isinstance(stats, dict) else []):
+            r = v.get("angle_range") if isinstance(v, dict) else None
+            if isinstance(r, list) and len(r) == 2 and all(isinstance(x, (int, float)) for x in r):
+                return (float(r[0]), float(r[1]))
+            return None
         return None
 
     def clip(self, t, *values):
@@ -527,7 +570,9 @@ def draw_vs_motion(rep, ax, channel, ideal=None, legend=True):
     peak = max(np.nanmax(np.abs(np.concatenate([lo, hi]))) if np.any(np.isfinite(lo)) else 0.0,
                np.nanmax(np.abs(ideal_v)) if ideal_v is not None else 0.0)
     scale, unit_label = scaled_unit(rep.unit(channel), peak)
-    x = rep.xaxis.of_time(t)
+    x, lo, hi = rep.xaxis.curve(t, lo, hi)
+    if same:
+        hi = lo
     if lo is hi:
         ax.plot(x, lo * scale, color=COLOR_CLEARANCE, linewidth=0.6, zorder=2)
     else:
@@ -536,7 +581,8 @@ def draw_vs_motion(rep, ax, channel, ideal=None, legend=True):
                         edgecolor=COLOR_CLEARANCE, linewidth=0.6, zorder=2)
     ax.add_line(Line2D([], [], color=COLOR_CLEARANCE, linewidth=0.6, label="Clearance joint"))
     if ideal_v is not None:
-        ax.plot(rep.xaxis.of_time(ideal_t), ideal_v * scale, label="Ideal joint", zorder=3,
+        ideal_x, ideal_v = rep.xaxis.curve(ideal_t, ideal_v)
+        ax.plot(ideal_x, ideal_v * scale, label="Ideal joint", zorder=3,
                 **IDEAL_STYLE)
     if legend and ideal_v is not None:
         legend_above(ax, ncol=2)

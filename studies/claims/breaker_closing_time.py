@@ -6,7 +6,12 @@ import sys
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import breaker_common as bc  # noqa: E402
 
-FIGURES = []
+FIGURES = [
+    {"kind": "series", "file": "velocity.svg",
+     "title": "Moving contact velocity, 0.1 mm at A and J (the paper's Figure 17b)",
+     "channel": "moving_contact.vx", "series": "closing", "ylabel": "m/s",
+     "where": {"joints": "A_J_0.1mm"}},
+]
 TIMES = ["t040", "t060", "t085"]
 PAPER = {"peak_vx_m_s": "13.31 → 6.21 m/s as the closing time goes 0.04 → 0.085 s",
          "peak_ax_m_s2": "1625.6 → 460.2 m/s²", "peak_J_force_N": "9754 → 3820 N"}

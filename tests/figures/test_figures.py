@@ -310,6 +310,45 @@ class FiguresOfASyntheticRun(unittest.TestCase):
         whole = lash_figures.Report(self.run_dir, self.report)
         self.assertIsNone(whole.window)
 
+    def test_an_angle_range_folds_the_curves_into_it(self):
+        # `lash report --angle-range 90,270` takes the statistics over those crank angles; the
+        # curves against the motion are then drawn against the angle folded into [90°, 270°],
+        # every revolution on top of the others, each revolution its own line.
+        import matplotlib.pyplot as plt
+        report = copy.deepcopy(self.report)
+        for v in report["analysis"]["statistics"].values():
+            v["angle_range"] = [90.0, 270.0]
+        rep = lash_figures.Report(self.run_dir, report)
+        self.assertEqual(rep.xaxis.fold, (90.0, 180.0))
+        x, v = rep.xaxis.curve(rep.time, rep.channel("slider.x"))
+        shown = np.isfinite(x)
+        self.assertTrue(np.all(x[shown] >= 90.0) and np.all(x[shown] <= 270.0 + 1e-9))
+        self.assertTrue(np.array_equal(shown, np.isfinite(v)))
+        # Two revolutions: the samples inside the range form two runs of finite values.
+        starts = np.count_nonzero(shown[1:] & ~shown[:-1]) + int(shown[0])
+        self.assertEqual(starts, 2)
+        with plt.rc_context(lash_figures.STYLE):
+            fig = lash_figures.plan_contact_force(rep)[0].draw()
+        try:
+            ax = fig.axes[0]
+            self.assertAlmostEqual(ax.get_xlim()[0], 90.0, delta=1e-9)
+            self.assertAlmostEqual(ax.get_xlim()[1], 270.0, delta=1e-9)
+            drawn = [x for line in ax.get_lines() for x in np.asarray(line.get_xdata(), float)]
+            drawn += [p[0] for c in ax.collections for path in c.get_paths() for p in path.vertices]
+            drawn = [x for x in drawn if np.isfinite(x)]
+            self.assertGreater(len(drawn), 10)
+            self.assertGreaterEqual(min(drawn), 90.0 - 1e-9)
+            self.assertLessEqual(max(drawn), 270.0 + 1e-9)
+        finally:
+            plt.close(fig)
+        # A range across 0° (300° to 60°) folds into [300°, 420°].
+        for v in report["analysis"]["statistics"].values():
+            v["angle_range"] = [300.0, 60.0]
+        rep = lash_figures.Report(self.run_dir, report)
+        self.assertEqual(rep.xaxis.fold, (300.0, 120.0))
+        x, _ = rep.xaxis.curve(rep.time, rep.channel("slider.x"))
+        self.assertTrue(np.nanmin(x) >= 300.0 and np.nanmax(x) <= 420.0 + 1e-9)
+
     def test_units_and_descriptions_come_from_channel_info(self):
         info = self.report["channel_info"]
         self.assertEqual(info["acc1.a"], {"unit": "m/s²",
