@@ -1088,13 +1088,31 @@
       el('p', {class: 'legend-note', text: 'One point per period: a periodic response gives one point (or k for a ' +
         'period-k orbit), a quasi-periodic one a closed curve, a chaotic one a scattered set.'})));
     s.append(grid);
-    const xs = P.points.map((p) => p[0]), ys = P.points.map((p) => p[1]);
-    // Clearance circle when the section is taken in a clearance joint's eccentricity.
+    sectionChart(b.holder, 'poincare', P.points, vars);
+    // Every other clearance joint's eccentricity at the same section times.
+    const others = (Array.isArray(P.joints) ? P.joints : []).filter((j) => j && Array.isArray(j.points) &&
+      j.points.length && Array.isArray(j.variables) && j.variables.length === 2 &&
+      !(j.variables[0] === vars[0] && j.variables[1] === vars[1]));
+    if (others.length) {
+      const more = el('div', {class: 'grid2'});
+      s.append(more);
+      others.forEach((j, k) => {
+        const jb = chartBlock(j.variables[0] + ' vs ' + j.variables[1], 'poincare-' + k,
+          j.points.length + ' points' + (isNum(j.distinct) ? ' · ' + j.distinct + ' distinct' : ''));
+        more.append(el('div', {}, jb.node));
+        sectionChart(jb.holder, 'poincare-' + k, j.points, j.variables);
+      });
+    }
+  }
+
+  /** One set of Poincaré points over two channels, with the clearance circle on an eccentricity. */
+  function sectionChart(holder, id, points, vars) {
+    const xs = points.map((p) => p[0]), ys = points.map((p) => p[1]);
     const [je, jq] = splitChannel(vars[0]);
     const cj = clearanceJoints.find((j) => j.name === je);
     const onEcc = cj && jq === 'ex';
     const ext = onEcc ? 1.2 * Math.max(cj.clearance.clearance, maxAbsOf([xs, ys])) : null;
-    xyChart(b.holder, 'poincare', xs, ys, {
+    xyChart(holder, id, xs, ys, {
       xUnit: unitOf(vars[0]), yUnit: unitOf(vars[1]), xLabel: vars[0], yLabel: vars[1], label: 'Poincaré points',
       color: PALETTE[1], dots: true, square: true, height: 340,
       range: onEcc ? () => [-ext, ext] : null, extent: ext,

@@ -17,7 +17,8 @@ Figures (family: file names), in the order of FAMILIES below:
   orbit                       orbit_<joint>: journal-centre path (e_x, e_y) and the clearance circle
   modes                       free flight / impact / continuous contact along time, with shares
   impact_velocity             histogram of the impact velocities of each clearance joint
-  poincare                    Poincaré-section points
+  poincare                    Poincaré-section points (poincare_<joint>: each further clearance
+                              joint's eccentricity at the same section times)
   spectra                     amplitude spectra, logarithmic amplitude axis
   phase                       phase_<x>_vs_<y>: each pair of analysis.phase
   lyapunov                    running estimates of the Lyapunov exponents (the spectrum)
@@ -825,6 +826,26 @@ def plan_poincare(rep):
         raise Skip("no analysis.poincare.points")
     var = p.get("variables") or ["", ""]
     var = [str(v) for v in var[:2]] + [""] * (2 - len(var[:2]))
+    plans = [Plan("poincare", "poincare", section_drawing(rep, pts, var))]
+    # Every other clearance joint's eccentricity at the same section times (analysis.poincare.joints).
+    for js in p.get("joints") or []:
+        if not isinstance(js, dict) or not isinstance(js.get("joint"), str):
+            continue
+        jvar = [str(v) for v in (js.get("variables") or [])[:2]]
+        try:
+            jpts = np.asarray(js.get("points"), dtype=float)
+        except (TypeError, ValueError):
+            continue
+        if jvar == var or len(jvar) != 2 or jpts.ndim != 2 or jpts.shape[1] < 2 or len(jpts) == 0:
+            continue
+        plans.append(Plan("poincare", "poincare_" + safe_name(js["joint"]),
+                          section_drawing(rep, jpts, jvar)))
+    return plans
+
+
+def section_drawing(rep, pts, var):
+    """The drawing of one set of Poincaré points over the variables var (two channel names)."""
+    import numpy as np
 
     def draw():
         fig, (ax,) = new_figure(width=2.8, height=2.8)
@@ -847,7 +868,7 @@ def plan_poincare(rep):
             ax.set_xlabel(axis_label(rep, var[0], lx) if var[0] else "First variable")
             ax.set_ylabel(axis_label(rep, var[1], ly) if var[1] else "Second variable")
         return fig
-    return [Plan("poincare", "poincare", draw)]
+    return draw
 
 
 def plan_spectra(rep):

@@ -393,6 +393,21 @@ class FiguresOfASyntheticRun(unittest.TestCase):
         [(x_label, y_label)] = axis_labels(lash_figures.plan_poincare(rep)[0])
         self.assertEqual((x_label, y_label), ("rod_slider.ex", "rod_slider.ey"))
 
+    def test_every_clearance_joint_gets_its_poincare_figure(self):
+        report = copy.deepcopy(self.report)
+        p = report["analysis"]["poincare"]
+        main = [[x, y] for x, y in p["points"]]
+        p["joints"] = [{"joint": "rod_slider", "variables": p["variables"], "points": main},
+                       {"joint": "crank rod", "variables": ["crank_rod.ex", "crank_rod.ey"],
+                        "points": [[1e-5, 2e-5], [3e-5, -1e-5]]},
+                       {"joint": "empty", "variables": ["e.ex", "e.ey"], "points": []}]
+        rep = lash_figures.Report(self.run_dir, report)
+        plans = lash_figures.plan_poincare(rep)
+        # The main section, then the joint whose variables differ; a joint without points: none.
+        self.assertEqual([pl.name for pl in plans], ["poincare", "poincare_crank-rod"])
+        [(x_label, y_label)] = axis_labels(plans[1])
+        self.assertIn("crank_rod.ex", x_label)
+
     def test_only_and_format_select_the_files(self):
         out = tempfile.mkdtemp(dir=self.tmp)
         shutil.copy(os.path.join(self.run_dir, "report_data.json"), out)

@@ -106,7 +106,15 @@ try {
     if (J && ((J.histogram && J.histogram.counts && J.histogram.counts.length) ||
               (J.impact_velocities && J.impact_velocities.length))) expect.push(`hist-${name}`);
   }
-  if (A.poincare && A.poincare.points && A.poincare.points.length) expect.push('poincare');
+  if (A.poincare && A.poincare.points && A.poincare.points.length) {
+    expect.push('poincare');
+    // One more chart per clearance joint whose section variables differ from the main ones.
+    const main = JSON.stringify((A.poincare.variables || []).slice(0, 2));
+    (Array.isArray(A.poincare.joints) ? A.poincare.joints : [])
+      .filter((j) => j && Array.isArray(j.points) && j.points.length && Array.isArray(j.variables) &&
+        j.variables.length === 2 && JSON.stringify(j.variables) !== main)
+      .forEach((j, k) => expect.push('poincare-' + k));
+  }
   if (A.spectra && Object.keys(A.spectra).length) expect.push('spectrum');
   if (A.lyapunov && A.lyapunov.history && A.lyapunov.history.length) expect.push('lyapunov');
   for (const id of expect) if (!ids.has(id)) fail(`no chart ${id} although the data has it`);
