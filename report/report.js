@@ -899,10 +899,17 @@
     const st = analysis.statistics;
     if (isEmptyObj(st)) notComputed(holder);
     else {
-      holder.append(table(['channel', 'description', 'unit', 'min', 'max', 'peak', 'rms', 'crest factor', 'window [ms]'],
+      const rows = Object.values(st);
+      const exact = rows.filter((v) => v && v.extrema === 'exact').length;
+      holder.append(el('p', {class: 'legend-note', text: exact === rows.length
+        ? 'min, max and peak are exact: tracked between outputs on the integrator\'s dense output, ' +
+          'independent of the output interval; RMS and crest factor use the output samples.'
+        : 'min, max and peak over a crank-angle range come from the output samples (exact only over time windows).'}));
+      holder.append(table(['channel', 'description', 'unit', 'min', 'max', 'peak', 'at [ms]', 'rms', 'crest factor', 'window [ms]'],
         Object.entries(st).map(([n, v]) => [n, descriptionOf(n), unitText(unitOf(n)), fmt(v.min), fmt(v.max), fmt(v.peak),
+          isNum(v.t_max) && isNum(v.t_min) ? fmt((Math.abs(v.max) >= Math.abs(v.min) ? v.t_max : v.t_min) * 1e3) : '–',
           fmt(v.rms), fmt(v.crest, 3), Array.isArray(v.window) ? fmt(v.window[0] * 1e3) + ' – ' + fmt(v.window[1] * 1e3) : '–']),
-        [3, 4, 5, 6, 7, 8]));
+        [3, 4, 5, 6, 7, 8, 9]));
     }
     let holder2 = null;
     const c = section('comparison', 'Comparison with the ideal twin', 'Ideal comparison',

@@ -179,3 +179,40 @@ solver: {rtol: 1e-9, atol: 1e-12, end_time: 0.3, output_interval: 0.3, initial_s
   // The two outputs alone see none of it.
   EXPECT_LT(r.sampled("block.vx").max, 0.2 * 0.9);
 }
+
+TEST(Extrema, AWindowCountsItsEndsAndRefinesInsideItOnly) {
+  // The spring-mass of the test above, extrema over t ∈ [0.05, 0.12] only (20t ∈ [1, 2.4]):
+  // vx = −0.2 sin 20t has its minimum −0.2 inside (t = π/40) and its largest value at the
+  // window's end, −0.2 sin 2.4; ax = −4 cos 20t rises through the window: −4 cos 1 at its start,
+  // −4 cos 2.4 at its end. No output falls in the window (outputs at 0 and 0.3 s only).
+  const std::string yaml = R"Y(
+bodies:
+  block: {mass: 2.0, inertia: 0.01, position: [0.11, 0]}
+ground:
+  markers: {A: [0, 0]}
+joints:
+  guide: {type: translational, guide: ground.A, slider: block, axis: [1, 0]}
+loads:
+  spring: {type: spring_damper, from: ground.A, to: block, stiffness: 800, free_length: 0.1}
+solver: {rtol: 1e-9, atol: 1e-12, end_time: 0.3, output_interval: 0.3, initial_state: given}
+)Y";
+  PeakRun r;
+  r.model = load_model_text(yaml, "spring.yaml", {}).model;
+  Workspace ws(r.model);
+  r.obs = std::make_unique<PeakObserver>(r.model);
+  r.obs->tracked.set_window(0.05, 0.12);
+  r.result = simulate(r.model, ws, *r.obs);
+  ASSERT_TRUE(r.result.status.ok) << r.result.status.message;
+  const ChannelExtremum& v = r.tracked("block.vx");
+  EXPECT_NEAR(v.min, -0.2, 1e-7);
+  EXPECT_NEAR(v.t_min, M_PI / 40, 1e-5);
+  EXPECT_NEAR(v.max, -0.2 * std::sin(2.4), 1e-7);
+  EXPECT_NEAR(v.t_max, 0.12, 1e-12);
+  const ChannelExtremum& a = r.tracked("block.ax");
+  EXPECT_NEAR(a.min, -4.0 * std::cos(1.0), 1e-6);
+  EXPECT_NEAR(a.t_min, 0.05, 1e-12);
+  EXPECT_NEAR(a.max, -4.0 * std::cos(2.4), 1e-6);
+  EXPECT_NEAR(a.t_max, 0.12, 1e-12);
+  // Over the whole run the same channel reaches +4 (t = π/20): outside the window, not counted.
+  EXPECT_LT(a.max, 3.0);
+}

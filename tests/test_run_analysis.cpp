@@ -166,10 +166,11 @@ TEST(RunAnalysis, FloresExampleResultsAreCompleteAndConsistent) {
     EXPECT_GE(deg, 0.0);
     EXPECT_LT(deg, 360.0);
   }
-  // Min/max decimation keeps the impact spikes: the decimated peak is the true peak.
+  // The statistics' extrema are tracked between outputs: at least the decimated series' peak.
   double peak = 0;
   for (double v : values(r.series, "slider.ax")) peak = std::max(peak, std::abs(v));
-  EXPECT_EQ(peak, stat(r, "slider.ax").peak);
+  EXPECT_TRUE(stat(r, "slider.ax").exact);
+  EXPECT_LE(peak, stat(r, "slider.ax").peak);
   // Clearance makes the slider acceleration peak larger than the ideal mechanism's 19.4 km/s².
   const ChannelComparison& cmp = comparison(r, "slider.ax");
   EXPECT_NEAR(cmp.ideal_peak, 19419, 30);
@@ -341,9 +342,13 @@ TEST(RunAnalysis, ExtraObserverSeesTheMainRun) {
   for (const auto& e : rec.events)
     if (e.onset) onset_velocities.push_back(e.velocity);
   EXPECT_EQ(r.clearance[0].modes.impact_velocities, onset_velocities);
-  double peak = 0;
+  // Min/max decimation keeps the impact spikes: the decimated peak is the largest output sample;
+  // the statistics' peak, tracked between outputs, is at least that.
+  double peak = 0, decimated = 0;
   for (double v : rec["slider.ax"]) peak = std::max(peak, std::abs(v));
-  EXPECT_EQ(peak, stat(r, "slider.ax").peak);
+  for (double v : values(r.series, "slider.ax")) decimated = std::max(decimated, std::abs(v));
+  EXPECT_EQ(decimated, peak);
+  EXPECT_GE(stat(r, "slider.ax").peak, peak);
   // An option naming what does not exist fails before anything runs.
   Recorder none(model);
   o.fft_channels = {"slider.az"};

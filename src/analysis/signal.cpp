@@ -23,9 +23,8 @@ void make_fftw_planner_thread_safe() {
 
 void ChannelStats::add(double t, double v) {
   if (t < t0 || t > t1) return;
-  if (n == 0) min = max = v;
-  min = std::min(min, v);
-  max = std::max(max, v);
+  if (n == 0 || v < min) min = v, t_min = t;
+  if (n == 0 || v > max) max = v, t_max = t;
   sum += v;
   sum_sq += v * v;
   ++n;

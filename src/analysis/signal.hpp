@@ -11,6 +11,7 @@ struct ChannelStats {
   double t0 = -1e300, t1 = 1e300;
   long n = 0;
   double min = 0.0, max = 0.0, sum = 0.0, sum_sq = 0.0;
+  double t_min = 0.0, t_max = 0.0;      ///< times of min and max
   void add(double t, double v);
   double peak() const;                  ///< max |v|
   double rms() const;                   ///< sqrt(mean v²)

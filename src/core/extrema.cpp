@@ -34,6 +34,7 @@ ChannelExtrema::ChannelExtrema(const Model& model) : model_(model) {
 }
 
 void ChannelExtrema::sample(double t, const double* values) {
+  if (t < from_ || t > to_) return;
   for (size_t i = 0; i < ext_.size(); ++i) {
     const double v = values[i];
     if (!std::isfinite(v)) continue;
@@ -60,10 +61,17 @@ bool ChannelExtrema::probe_values(StepProbe& probe, double t, std::vector<double
 void ChannelExtrema::step(double t0, double t1, const Eigen::VectorXd& y1, const Workspace& ws1,
                           StepProbe& probe) {
   const double h = t1 - t0;
+  if (t1 < from_ || t0 > to_) {  // outside the window: nothing to track
+    have_slope_ = false;
+    return;
+  }
   channel_values(model_, ws1, y1, v1_.data());
   sample(t1, v1_.data());
   if (!(h > 0.0)) return;
   const double eps = kSlopeFraction * h;
+  // A window end inside the step: its value counts (an extremum over the window may sit there).
+  for (const double edge : {from_, to_})
+    if (edge > t0 && edge < t1 && !probe_values(probe, edge, tmp_)) return;
   // The slope at t0: the previous step's left slope, or a forward difference after a restart.
   if (!have_slope_ || t0 != t_last_) {
     if (!probe_values(probe, t0, v0_)) return;
@@ -82,7 +90,8 @@ void ChannelExtrema::step(double t0, double t1, const Eigen::VectorXd& y1, const
       const double est = hermite_max(sign * v0_[i], sign * a, sign * v1_[i], sign * b, h);
       const double bulge = est - std::max(sign * v0_[i], sign * v1_[i]);
       const double best = sign > 0 ? ext_[i].max : -ext_[i].min;
-      if (est + bulge >= best) refine(probe, static_cast<int>(i), sign, t0, t1);
+      if (est + bulge >= best)
+        refine(probe, static_cast<int>(i), sign, std::max(t0, from_), std::min(t1, to_));
     }
   }
   std::swap(v0_, v1_);

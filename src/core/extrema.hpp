@@ -4,6 +4,7 @@
 /// output, every accepted integrator step and every located event, and refined inside a step on
 /// the integrator's dense output where a channel turns (docs/analysis.md, "How peaks are found").
 #include <Eigen/Core>
+#include <limits>
 #include <vector>
 
 #include "core/model.hpp"
@@ -36,6 +37,11 @@ class ChannelExtrema {
 
   explicit ChannelExtrema(const Model& model);
 
+  /// Only values at times in [from, to] count (default: every time). A step across an end
+  /// samples the end itself and refines inside the window only, so the extrema over the window
+  /// are as exact as over a whole run.
+  void set_window(double from, double to) { from_ = from, to_ = to; }
+
   /// A value of every channel at time t (an output or an event): updates the extrema only.
   void sample(double t, const double* values);
   /// Channels evaluated from `ws` at (t, y).
@@ -60,6 +66,8 @@ class ChannelExtrema {
   std::vector<ChannelExtremum> ext_;
   std::vector<double> v0_, d0_, v1_, d1_, tmp_;
   double t_last_ = 0.0;
+  double from_ = -std::numeric_limits<double>::infinity();
+  double to_ = std::numeric_limits<double>::infinity();
   bool have_slope_ = false;
   long refinements_ = 0, evaluations_ = 0;
 };

@@ -223,7 +223,8 @@ json report_data(const Model& model, const RunAnalysis& a) {
   json an, st = json::object();
   for (const auto& c : a.statistics)
     st[c.channel] = {{"min", c.min}, {"max", c.max}, {"peak", c.peak}, {"rms", c.rms},
-                     {"crest", c.crest}, {"window", {c.t0, c.t1}},
+                     {"crest", c.crest}, {"t_min", c.t_min}, {"t_max", c.t_max},
+                     {"extrema", c.exact ? "exact" : "samples"}, {"window", {c.t0, c.t1}},
                      {"angle_range", std::isnan(c.angle0_deg)
                                          ? json(nullptr)
                                          : json({c.angle0_deg, c.angle1_deg})}};

@@ -163,6 +163,18 @@ RecordedRun read_run_folder(const std::string& dir, const Model& model) {
     run.result.max_constraint_violation = sum.at("max_constraint_violation").get<double>();
     if (sum.contains("warnings"))
       run.result.warnings = sum["warnings"].get<std::vector<std::string>>();
+    // Every channel's exact extrema over the run (tracked between outputs while it ran).
+    if (sum.contains("channels") && sum["channels"].is_object())
+      for (const auto& [name, c] : sum["channels"].items()) {
+        if (!c.is_object() || !c.contains("min") || !c["min"].is_number()) continue;
+        ChannelExtremum e;
+        e.min = c.at("min").get<double>();
+        e.t_min = c.at("t_min").get<double>();
+        e.max = c.at("max").get<double>();
+        e.t_max = c.at("t_max").get<double>();
+        e.seen = true;
+        run.extrema[name] = e;
+      }
   } catch (const json::exception& e) {
     damaged(summary_path + ": damaged (" + e.what() + "); run the model again");
   }

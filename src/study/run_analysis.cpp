@@ -73,19 +73,29 @@ class Decimator {
 /// The channels of a model, in column order.
 std::vector<ChannelInfo> channels_of(const Model& m) { return channel_info(m, Workspace(m)); }
 
-/// Keeps every output of every channel (the ideal twin, compared sample by sample).
+/// Keeps every output of every channel (the ideal twin, compared sample by sample) and every
+/// channel's exact extrema over the run.
 class Keeper : public Observer {
  public:
-  explicit Keeper(const Model& m) : model_(m), channels(channels_of(m)), v_(channels.size()) {
+  explicit Keeper(const Model& m)
+      : model_(m), channels(channels_of(m)), extrema(m), v_(channels.size()) {
     data.resize(channels.size());
   }
-  void output(double, const Eigen::VectorXd& y, const Workspace& ws) override {
+  void output(double t, const Eigen::VectorXd& y, const Workspace& ws) override {
     channel_values(model_, ws, y, v_.data());
     for (size_t i = 0; i < v_.size(); ++i) data[i].push_back(v_[i]);
+    extrema.sample(t, v_.data());
+  }
+  void event(const ContactEvent&, const Workspace&) override { extrema.restart(); }
+  bool wants_steps() const override { return true; }
+  void step(double t0, double t1, const Eigen::VectorXd& y, const Workspace& ws,
+            StepProbe& probe) override {
+    extrema.step(t0, t1, y, ws, probe);
   }
   const Model& model_;
   std::vector<ChannelInfo> channels;
   std::vector<std::vector<double>> data;
+  ChannelExtrema extrema;
 
  private:
   std::vector<double> v_;
@@ -286,13 +296,20 @@ class Collector : public Observer {
   bool feed_sections = true;        ///< sections to the SampleAnalysis
   bool stop_at_lyapunov_start = false;  ///< stop the run once the start state is kept
   const Driver* angle_driver = nullptr;
+  /// Exact extrema over the statistics window (null: the statistics keep the samples' extrema).
+  ChannelExtrema* extrema = nullptr;
+  /// Stop the run at the first output past this time (the end of what is needed).
+  double stop_after = std::numeric_limits<double>::infinity();
 
   std::string stop_reason() const override {
     if (stop_at_lyapunov_start && have_lyapunov_start) return "the start state is kept";
+    if (t_output_ > stop_after) return "what is needed is simulated";
     return extra_ ? extra_->stop_reason() : std::string();
   }
   void output(double t, const Eigen::VectorXd& y, const Workspace& ws) override {
     if (extra_) extra_->output(t, y, ws);
+    if (extrema) extrema->sample(t, y, ws);
+    t_output_ = t;
     if (!feed_outputs) return;
     channel_values(model_, ws, y, v_.data());
     if (first_)
@@ -303,15 +320,22 @@ class Collector : public Observer {
   }
   void event(const ContactEvent& e, const Workspace& ws) override {
     if (extra_) extra_->event(e, ws);
+    if (extrema) extrema->restart();
     if (feed_outputs) sa_.event(e.clearance, e.t, e.onset, e.velocity);
   }
   void progress(double t, double t_end) override {
     if (extra_) extra_->progress(t, t_end);
   }
-  bool wants_steps() const override { return extra_ && extra_->wants_steps(); }
+  bool wants_steps() const override { return extrema || (extra_ && extra_->wants_steps()); }
   void step(double t0, double t1, const Eigen::VectorXd& y, const Workspace& ws,
             StepProbe& probe) override {
-    if (extra_) extra_->step(t0, t1, y, ws, probe);
+    if (!(extra_ && extra_->wants_steps())) {
+      if (extrema) extrema->step(t0, t1, y, ws, probe);
+      return;
+    }
+    extra_->step(t0, t1, y, ws, probe);
+    // The probe moved `ws` away from t1: evaluate it there again for the second user.
+    if (extrema && probe.at(t1)) extrema->step(t0, t1, probe.state(), probe.workspace(), probe);
   }
   void section(double t, const Eigen::VectorXd& y, const Workspace& ws) override {
     if (extra_) extra_->section(t, y, ws);
@@ -344,6 +368,7 @@ class Collector : public Observer {
   std::unique_ptr<SectionPoint> point_;  ///< over every channel
   Observer* extra_;
   bool first_ = true;
+  double t_output_ = -std::numeric_limits<double>::infinity();
 };
 
 /// Stroboscopic sections at k·T from output rows: each section's point by cubic Lagrange
@@ -730,13 +755,33 @@ void connect(SampleAnalysis& sa, const Plan& p, const Keeper* twin,
   sa.fft_data.resize(sa.fft_index.size());
 }
 
+/// Extrema by channel name: the channels of `model` in `ext`'s order.
+std::map<std::string, ChannelExtremum> extrema_by_name(const Model& model, const ChannelExtrema& ext) {
+  std::map<std::string, ChannelExtremum> out;
+  const std::vector<ChannelInfo> names = channels_of(model);
+  for (size_t i = 0; i < names.size() && i < ext.extrema().size(); ++i)
+    if (ext.extrema()[i].seen) out[names[i].name] = ext.extrema()[i];
+  return out;
+}
+
+/// Exact extrema over the statistics window, tracked by the run that feeds the rows; none over a
+/// crank-angle range (they hold for times, not angles).
+std::optional<ChannelExtrema> window_extrema(const Model& model, const AnalysisOptions& o) {
+  if (!std::isnan(o.stats_angle0)) return std::nullopt;
+  std::optional<ChannelExtrema> ext(std::in_place, model);
+  ext->set_window(o.stats_t0, o.stats_t1);
+  return ext;
+}
+
 /// The analyses of the gathered rows: series, twin comparison, frames, statistics, contact
 /// modes, sections, spectra, the Lyapunov exponent (from `lyapunov_start` at `lyapunov_t0`, when
-/// given) and the verdict.
+/// given) and the verdict. `exact`: the channels' exact extrema over the statistics window (null:
+/// the samples' extrema).
 RunAnalysis analyze_samples(const Model& model, const AnalysisOptions& o, Plan& p,
                             SampleAnalysis& sa, std::unique_ptr<Keeper> twin,
                             const RunResult& twin_result, RunResult main,
-                            const Eigen::VectorXd* lyapunov_start, double lyapunov_t0) {
+                            const Eigen::VectorXd* lyapunov_start, double lyapunov_t0,
+                            const std::map<std::string, ChannelExtremum>* exact) {
   const SolverSettings& s = model.solver;
   const int nc = static_cast<int>(p.clearance_joints.size());
   RunAnalysis out;
@@ -795,9 +840,21 @@ RunAnalysis analyze_samples(const Model& model, const AnalysisOptions& o, Plan& 
     st.samples = c.n;
     st.min = c.min;
     st.max = c.max;
-    st.peak = c.peak();
+    st.t_min = c.t_min;
+    st.t_max = c.t_max;
+    if (exact) {
+      const auto e = exact->find(st.channel);
+      if (e != exact->end()) {
+        // Between outputs a channel can only reach further than its samples (a NaN sample is
+        // not tracked): the exact extrema include the samples'.
+        if (e->second.min <= c.min) st.min = e->second.min, st.t_min = e->second.t_min;
+        if (e->second.max >= c.max) st.max = e->second.max, st.t_max = e->second.t_max;
+        st.exact = true;
+      }
+    }
+    st.peak = std::max(std::abs(st.min), std::abs(st.max));
     st.rms = c.rms();
-    st.crest = c.crest();
+    st.crest = st.rms > 0 ? st.peak / st.rms : 0.0;
     st.t0 = std::max(c.t0, 0.0);
     st.t1 = std::min(c.t1, s.end_time);
     st.angle0_deg = o.stats_angle0;
@@ -807,12 +864,14 @@ RunAnalysis analyze_samples(const Model& model, const AnalysisOptions& o, Plan& 
       const auto& tv = twin->data[sa.twin_index[i]];
       double ideal_peak = 0;
       for (double v : tv) ideal_peak = std::max(ideal_peak, std::abs(v));
+      const ChannelExtremum& te = twin->extrema.extrema()[sa.twin_index[i]];
+      if (te.seen) ideal_peak = std::max({ideal_peak, std::abs(te.min), std::abs(te.max)});
       ChannelComparison cmp;
       cmp.channel = sa.channels[i].name;
       cmp.rms_deviation = std::sqrt(sa.dev_sq[i] / sa.dev_n[i]);
       cmp.max_deviation = sa.dev_max[i];
       cmp.ideal_peak = ideal_peak;
-      cmp.peak_ratio = ideal_peak > 0 ? c.peak() / ideal_peak : 0.0;
+      cmp.peak_ratio = ideal_peak > 0 ? st.peak / ideal_peak : 0.0;
       out.ideal_twin->comparison.push_back(cmp);
     }
   }
@@ -1004,14 +1063,17 @@ RunAnalysis analyze_run(const Model& model, const AnalysisOptions& o, Observer* 
   sa.angle1 = o.stats_angle1;
   Collector col(model, ws, sa, extra);
   col.angle_driver = p.drv;
+  std::optional<ChannelExtrema> ext = window_extrema(model, o);
+  if (ext) col.extrema = &*ext;
   RunOptions run_options;
   run_options.interrupt = o.interrupt;
   run_options.from = o.from;
   RunResult main = simulate(model, ws, col, SectionSchedule{p.planes.empty() ? p.period : 0.0, 0.0},
                             p.planes, run_options);
+  const auto exact = ext ? std::optional(extrema_by_name(model, *ext)) : std::nullopt;
   RunAnalysis out = analyze_samples(model, o, p, sa, std::move(twin), twin_result, std::move(main),
                                     col.have_lyapunov_start ? &col.lyapunov_start : nullptr,
-                                    col.lyapunov_t0);
+                                    col.lyapunov_t0, exact ? &*exact : nullptr);
   out.provenance.read.push_back("the main run's outputs, events and sections, observed while it ran");
   if (out.ideal_twin) out.provenance.resimulated.push_back("ideal twin: run beside the main run");
   if (out.lyapunov && out.lyapunov->estimated)
@@ -1078,10 +1140,11 @@ RunAnalysis analyze_recorded_run(const Model& model, const AnalysisOptions& o, R
   RecordedAngle angle(model, p.drv);
   bool angle_ok = true;
   std::vector<double> v(cols.size());
-  double t = 0.0;
+  double t = 0.0, t_first = 0.0;
   bool first = true;
   while (run.next_row(t, v.data())) {
     if (first && t != 0.0 && p.drv && p.drv->profile == DriverProfile::speed) angle_ok = false;
+    if (first) t_first = t;
     first = false;
     sa.output(t, v.data(), angle_ok ? angle.at(t) : std::nan(""));
     if (rows_sections) strobe.row(t, v.data());
@@ -1121,8 +1184,25 @@ RunAnalysis analyze_recorded_run(const Model& model, const AnalysisOptions& o, R
                            "speed expression");
   }
 
-  // What the files do not hold: sections on a plane (or of channels not written), and the state
-  // where the Lyapunov trajectories start. The main run is made again as far as needed.
+  // Exact extrema over the statistics window: summary.json's when the window is the whole run;
+  // over a narrower window the main run is made again with them tracked; none over a
+  // crank-angle range (they hold for times, not angles).
+  std::optional<std::map<std::string, ChannelExtremum>> exact;
+  std::optional<ChannelExtrema> ext;
+  if (!std::isnan(o.stats_angle0)) {
+    prov.skipped.push_back("exact extrema over a crank-angle range: the statistics' min, max and "
+                           "peak there are the output samples'");
+  } else if (o.stats_t0 <= t_first && o.stats_t1 >= t && !run.extrema.empty()) {
+    exact = run.extrema;
+    prov.read.push_back("exact extrema (min, max, peak, tracked between outputs): summary.json");
+  } else {
+    ext.emplace(model);
+    ext->set_window(o.stats_t0, o.stats_t1);
+  }
+
+  // What the files do not hold: sections on a plane (or of channels not written), the state
+  // where the Lyapunov trajectories start and the extrema over a window. The main run is made
+  // again as far as needed.
   const bool need_sections = (p.period > 0 || !p.planes.empty()) && !rows_sections;
   const bool want_lyapunov = o.lyapunov && p.free_coordinates > 0 && run.result.status.ok &&
                              p.period > 0 &&
@@ -1131,12 +1211,13 @@ RunAnalysis analyze_recorded_run(const Model& model, const AnalysisOptions& o, R
   Eigen::VectorXd start;
   double start_t = 0.0;
   bool have_start = false;
-  if (need_sections || want_lyapunov) {
+  if (need_sections || want_lyapunov || ext) {
     Workspace ws(model);
     Collector col(model, ws, sa, nullptr);
     col.feed_outputs = false;
     col.feed_sections = need_sections;
-    col.stop_at_lyapunov_start = !need_sections;
+    col.stop_at_lyapunov_start = !need_sections && !ext;
+    if (ext) col.extrema = &*ext, col.stop_after = need_sections ? s.end_time : o.stats_t1;
     RunOptions ro;
     ro.interrupt = o.interrupt;
     const RunResult again = simulate(model, ws, col,
@@ -1148,14 +1229,20 @@ RunAnalysis analyze_recorded_run(const Model& model, const AnalysisOptions& o, R
                       : !row_point.complete() ? "stroboscopic sections (their channels were not written)"
                                               : "stroboscopic sections" + strobe_note) +
           ": the main run made again to t = " + fmt_g(again.status.t) + " s");
-    else
+    else if (want_lyapunov && !ext)
       prov.resimulated.push_back("Lyapunov start state (not written): the main run made again to "
                                  "its first section after the transient, t = " +
                                  fmt_g(col.lyapunov_t0) + " s");
+    if (ext) {
+      exact = extrema_by_name(model, *ext);
+      prov.resimulated.push_back("exact extrema (min, max, peak) over the statistics window: the "
+                                 "main run made again to t = " + fmt_g(again.status.t) + " s");
+    }
     if (col.have_lyapunov_start) start = col.lyapunov_start, start_t = col.lyapunov_t0, have_start = true;
   }
   RunAnalysis out = analyze_samples(model, o, p, sa, std::move(twin), twin_result, run.result,
-                                    have_start ? &start : nullptr, start_t);
+                                    have_start ? &start : nullptr, start_t,
+                                    exact ? &*exact : nullptr);
   if (out.lyapunov && out.lyapunov->estimated)
     prov.resimulated.push_back("Lyapunov exponent: two trajectories, simulated now");
   out.provenance = std::move(prov);

@@ -10,6 +10,7 @@
 #include <atomic>
 #include <cmath>
 #include <functional>
+#include <map>
 #include <optional>
 #include <string>
 #include <utility>
@@ -17,6 +18,7 @@
 
 #include "analysis/dynamics_analysis.hpp"
 #include "core/elements/registry.hpp"
+#include "core/extrema.hpp"
 #include "core/math.hpp"
 #include "core/simulate.hpp"
 
@@ -94,6 +96,11 @@ struct ChannelStatistics {
   std::string channel;
   long samples = 0;
   double min = 0.0, max = 0.0, peak = 0.0, rms = 0.0, crest = 0.0;
+  double t_min = 0.0, t_max = 0.0;  ///< when min and max occurred, s
+  /// min, max, peak (and crest = peak / RMS) are exact: tracked between outputs on the dense
+  /// output over the window (core/extrema.hpp). False over a crank-angle range: there they are
+  /// the output samples' (RMS always is: it needs the uniform grid).
+  bool exact = false;
   double t0 = 0.0, t1 = 0.0;    ///< the time window clipped to [0, end_time], s
   /// The crank-angle range (deg) the statistics were restricted to; NaN: none.
   double angle0_deg = std::nan(""), angle1_deg = std::nan("");
@@ -281,6 +288,8 @@ struct RecordedRun {
   /// (naming the file and line) on a damaged row.
   std::function<bool(double& t, double* values)> next_row;
   std::vector<RecordedEvent> events;  ///< in time order
+  /// Every channel's exact extrema over the whole run, by name (summary.json `channels`).
+  std::map<std::string, ChannelExtremum> extrema;
   std::vector<std::string> read;      ///< what was read, as sentences (Provenance::read)
 };
 
