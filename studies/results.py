@@ -160,13 +160,17 @@ def xy_chart_svg(title, xlabel, ylabel, datasets):
     ys = [y for _, _, dy, _ in datasets for y in dy]
     if not xs:
         xs, ys = [0.0, 1.0], [0.0, 1.0]
-    xt, yt = nice_ticks(min(xs), max(xs)), nice_ticks(min(ys), max(ys))
-    x0, x1 = min(xt[0], min(xs)), max(xt[-1], max(xs))
-    y0, y1 = min(yt[0], min(ys)), max(yt[-1], max(ys))
+    x0, x1, y0, y1 = min(xs), max(xs), min(ys), max(ys)
     if x1 <= x0:
         x1 = x0 + 1.0
     if y1 <= y0:
         y1 = y0 + 1.0
+    # A margin so that no dot or peak sits on the frame (none along a time axis starting at 0).
+    y0, y1 = y0 - 0.04 * (y1 - y0), y1 + 0.04 * (y1 - y0)
+    if any(style == "dots" for _, _, _, style in datasets):
+        x0, x1 = x0 - 0.04 * (x1 - x0), x1 + 0.04 * (x1 - x0)
+    xt = [v for v in nice_ticks(x0, x1) if x0 <= v <= x1]
+    yt = [v for v in nice_ticks(y0, y1) if y0 <= v <= y1]
     px = lambda x: left + (w - left - right) * (x - x0) / (x1 - x0)
     py = lambda y: top + (h - top - bottom) * (1 - (y - y0) / (y1 - y0))
     out = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" '
