@@ -1022,23 +1022,41 @@ TEST(Cli, Hdf5SelectedChannelsAndAnInterruptedRun) {
 }
 #endif
 
-TEST(Cli, AnHdf5RunIsCheckedThenRunAgainAndSaysSo) {
-  // timeseries.h5 is not read yet: the folder is checked as any other (an edited model is
-  // refused), then the model runs again, and the output says so.
-  const fs::path dir = temp_dir("h5_report");
-  Result r = run_lash("run " + example() + " -q --set solver.end_time=0.003 --format hdf5 -o " + dir.string());
+TEST(Cli, AnHdf5RunIsReadLikeACsvRun) {
+  // The same run written as CSV and as HDF5: analyze reads each folder's own time series and
+  // gets the same statistics (the CSV keeps 9 digits); a dataset of another length than
+  // summary.json's rows, and an edited model, are refused naming the file.
+  const fs::path h5 = temp_dir("h5_report"), csv = temp_dir("csv_report");
+  const std::string run = "run " + example() + " -q --set solver.end_time=0.003 -o ";
+  Result r = run_lash(run + h5.string() + " --format hdf5");
   if (r.code == 2 && r.out.find("without HDF5") != std::string::npos) GTEST_SKIP() << "no HDF5";
   ASSERT_EQ(r.code, 0) << r.out;
-  r = run_lash("analyze " + dir.string() + " --no-lyapunov");
+  ASSERT_EQ(run_lash(run + csv.string()).code, 0);
+  r = run_lash("analyze " + h5.string() + " --no-lyapunov");
   EXPECT_EQ(r.code, 0) << r.out;
-  EXPECT_NE(r.out.find("simulated now: the main run: timeseries.h5"), std::string::npos) << r.out;
-  EXPECT_EQ(r.out.find("read: "), std::string::npos) << r.out;
-  const std::string model = lash::test::read_file((dir / "model_resolved.yaml").string());
-  std::ofstream(dir / "model_resolved.yaml") << model << "# edited\n";
-  fs::remove(dir / "analysis.json");
-  r = run_lash("analyze " + dir.string());
+  EXPECT_NE(r.out.find("read: time series: timeseries.h5"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("simulated now: the main run"), std::string::npos) << r.out;
+  ASSERT_EQ(run_lash("analyze " + csv.string() + " --no-lyapunov").code, 0);
+  using nlohmann::json;
+  const json a = json::parse(lash::test::read_file((h5 / "analysis.json").string()));
+  const json b = json::parse(lash::test::read_file((csv / "analysis.json").string()));
+  const json& sa = a["statistics"];
+  ASSERT_EQ(sa.size(), b["statistics"].size());
+  for (const auto& [name, v] : sa.items()) {
+    const json& w = b["statistics"][name];
+    const double scale = std::max(1e-300, std::abs(w["peak"].get<double>()));
+    for (const char* k : {"min", "max", "rms"})
+      EXPECT_NEAR(v[k].get<double>(), w[k].get<double>(), 1e-8 * scale) << name << " " << k;
+  }
+  // summary.json claiming one row more than the datasets hold.
+  json sum = json::parse(lash::test::read_file((h5 / "summary.json").string()));
+  sum["output"]["rows"] = sum["output"]["rows"].get<long long>() + 1;
+  std::ofstream(h5 / "summary.json") << sum.dump(2);
+  fs::remove(h5 / "analysis.json");
+  r = run_lash("analyze " + h5.string() + " --no-lyapunov");
   EXPECT_EQ(r.code, 2) << r.out;
-  EXPECT_NE(r.out.find("model_resolved.yaml: differs from the model this run used"), std::string::npos) << r.out;
-  EXPECT_FALSE(fs::exists(dir / "analysis.json"));
-  fs::remove_all(dir);
+  EXPECT_NE(r.out.find("timeseries.h5: dataset 'time' has"), std::string::npos) << r.out;
+  EXPECT_FALSE(fs::exists(h5 / "analysis.json"));
+  fs::remove_all(h5);
+  fs::remove_all(csv);
 }

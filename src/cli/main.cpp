@@ -350,17 +350,7 @@ int main(int argc, char** argv) {
       return kExitBadInput;
     }
     try {
-      ProgressObserver progress(nullptr, isatty(STDERR_FILENO));
-      lash::RunAnalysis ra;
-      if (recorded.next_row) {
-        ra = lash::analyze_recorded_run(model, ro, recorded);
-      } else {  // timeseries.h5 is not read yet: the main run is made again
-        ra = lash::analyze_run(model, ro, &progress);
-        ra.provenance.read.clear();
-        ra.provenance.resimulated.insert(ra.provenance.resimulated.begin(),
-                                         "the main run: timeseries.h5 (lash run --format hdf5) "
-                                         "is not read yet, so the model was run again");
-      }
+      lash::RunAnalysis ra = lash::analyze_recorded_run(model, ro, recorded);
       for (const auto& line : ra.provenance.read) std::cout << "read: " << line << "\n";
       for (const auto& line : ra.provenance.resimulated) std::cout << "simulated now: " << line << "\n";
       for (const auto& line : ra.provenance.skipped) std::cout << "skipped: " << line << "\n";

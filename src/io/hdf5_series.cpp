@@ -144,6 +144,82 @@ void Hdf5Series::abandon() {
   h_->file = -1;
 }
 
+struct Hdf5Rows::Handles {
+  hid_t file = -1;
+  std::vector<hid_t> datasets;
+  ~Handles() {
+    for (hid_t ds : datasets) H5Dclose(ds);
+    if (file >= 0) H5Fclose(file);
+  }
+};
+
+Hdf5Rows::Hdf5Rows(const std::string& path, const std::vector<std::string>& columns, long long rows)
+    : path_(path), h_(std::make_unique<Handles>()), rows_(rows) {
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  h_->file = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  if (h_->file < 0)
+    throw std::invalid_argument(path + ": damaged (not a readable HDF5 file); run the model again");
+  std::vector<std::string> names = {"time"};
+  names.insert(names.end(), columns.begin(), columns.end());
+  for (const auto& name : names) {
+    const hid_t ds = H5Lexists(h_->file, name.c_str(), H5P_DEFAULT) > 0
+                         ? H5Dopen2(h_->file, name.c_str(), H5P_DEFAULT)
+                         : -1;
+    if (ds < 0)
+      throw std::invalid_argument(path + ": no dataset '" + name + "' (summary.json lists it): "
+                                  "edited after the run? Run the model again");
+    h_->datasets.push_back(ds);
+    const hid_t space = H5Dget_space(ds), type = H5Dget_type(ds);
+    hsize_t n = 0;
+    const bool one_d = H5Sget_simple_extent_ndims(space) == 1 &&
+                       H5Sget_simple_extent_dims(space, &n, nullptr) == 1;
+    const bool doubles = H5Tget_class(type) == H5T_FLOAT && H5Tget_size(type) == 8;
+    H5Tclose(type);
+    H5Sclose(space);
+    if (!one_d || !doubles)
+      throw std::invalid_argument(path + ": dataset '" + name + "' is not a column of doubles");
+    if (static_cast<long long>(n) != rows)
+      throw std::invalid_argument(path + ": dataset '" + name + "' has " + std::to_string(n) +
+                                  " rows, summary.json says " + std::to_string(rows) +
+                                  ": cut or edited after the run");
+  }
+  chunk_.assign(names.size(), {});
+}
+
+Hdf5Rows::~Hdf5Rows() = default;
+
+void Hdf5Rows::read_chunk() {
+  const long long n = std::min<long long>(Hdf5Series::kChunkRows, rows_ - start_);
+  const hsize_t start[1] = {static_cast<hsize_t>(start_)}, count[1] = {static_cast<hsize_t>(n)};
+  const hid_t mem = H5Screate_simple(1, count, nullptr);
+  bool ok = mem >= 0;
+  for (std::size_t i = 0; ok && i < h_->datasets.size(); ++i) {
+    chunk_[i].resize(static_cast<std::size_t>(n));
+    const hid_t file_space = H5Dget_space(h_->datasets[i]);
+    ok = file_space >= 0 &&
+         H5Sselect_hyperslab(file_space, H5S_SELECT_SET, start, nullptr, count, nullptr) >= 0 &&
+         H5Dread(h_->datasets[i], H5T_NATIVE_DOUBLE, mem, file_space, H5P_DEFAULT,
+                 chunk_[i].data()) >= 0;
+    if (file_space >= 0) H5Sclose(file_space);
+  }
+  if (mem >= 0) H5Sclose(mem);
+  if (!ok) throw IoError(path_, "cannot read rows " + std::to_string(start_ + 1) + " to " +
+                                    std::to_string(start_ + n));
+  k_ = 0;
+}
+
+bool Hdf5Rows::next(double& t, double* values) {
+  if (k_ >= chunk_[0].size()) {
+    if (start_ + static_cast<long long>(chunk_[0].size()) >= rows_) return false;
+    start_ += static_cast<long long>(chunk_[0].size());
+    read_chunk();
+  }
+  t = chunk_[0][k_];
+  for (std::size_t i = 1; i < chunk_.size(); ++i) values[i - 1] = chunk_[i][k_];
+  ++k_;
+  return true;
+}
+
 #else  // no HDF5 in this build
 
 bool hdf5_available() { return false; }
@@ -158,6 +234,15 @@ void Hdf5Series::append(double, const double*) {}
 void Hdf5Series::write_buffered() {}
 void Hdf5Series::close() {}
 void Hdf5Series::abandon() {}
+
+struct Hdf5Rows::Handles {};
+Hdf5Rows::Hdf5Rows(const std::string& path, const std::vector<std::string>&, long long) : path_(path) {
+  throw std::invalid_argument(path + ": this lash was built without HDF5 (Debian's libhdf5-dev) "
+                              "and cannot read it");
+}
+Hdf5Rows::~Hdf5Rows() = default;
+bool Hdf5Rows::next(double&, double*) { return false; }
+void Hdf5Rows::read_chunk() {}
 
 #endif
 

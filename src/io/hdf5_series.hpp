@@ -52,4 +52,30 @@ class Hdf5Series {
   long long rows_ = 0;
 };
 
+/// Reads the rows of a timeseries.h5 back, one chunk of every dataset at a time (memory: one
+/// chunk per column, whatever the run's length).
+class Hdf5Rows {
+ public:
+  /// Opens `path` read-only and the datasets `time` and `columns` (in that order). Throws
+  /// std::invalid_argument naming the file and what is wrong (a dataset missing, not 1-D
+  /// doubles, or not `rows` long: cut or edited after the run), or in a build without HDF5.
+  Hdf5Rows(const std::string& path, const std::vector<std::string>& columns, long long rows);
+  Hdf5Rows(const Hdf5Rows&) = delete;
+  Hdf5Rows& operator=(const Hdf5Rows&) = delete;
+  ~Hdf5Rows();
+  /// The next row: its time and one value per column; false after the last. Throws IoError
+  /// when a read fails.
+  bool next(double& t, double* values);
+
+ private:
+  void read_chunk();
+
+  struct Handles;
+  std::string path_;
+  std::unique_ptr<Handles> h_;
+  std::vector<std::vector<double>> chunk_;  ///< the current chunk, column by column
+  long long rows_ = 0, start_ = 0;          ///< rows in the file, first row of the chunk
+  std::size_t k_ = 0;                       ///< next row within the chunk
+};
+
 }  // namespace lash

@@ -1,5 +1,7 @@
 #include "io/run_folder.hpp"
 
+#include "io/hdf5_series.hpp"
+
 #include <algorithm>
 #include <cerrno>
 #include <charconv>
@@ -255,7 +257,18 @@ RecordedRun read_run_folder(const std::string& dir, const Model& model) {
   // The time series: header and row count now, each row as it is read.
   run.series_file = dir + "/" + file;
   if (!fs::exists(run.series_file)) damaged(run.series_file + ": missing (summary.json lists it)");
-  if (file == "timeseries.h5") return run;  // not read yet: no next_row
+  if (file == "timeseries.h5") {
+    std::shared_ptr<Hdf5Rows> h5;
+    try {
+      h5 = std::make_shared<Hdf5Rows>(run.series_file, run.columns, rows);
+    } catch (const std::invalid_argument& e) {
+      damaged(e.what());
+    }
+    run.next_row = [h5](double& t, double* v) { return h5->next(t, v); };
+    run.read.push_back("time series: " + file + " (" + std::to_string(rows) + " rows, " +
+                       std::to_string(run.columns.size()) + " channels)");
+    return run;
+  }
   const auto [lines, whole] = count_lines(run.series_file);
   if (!whole)
     damaged(run.series_file + ":" + std::to_string(lines + 1) + ": the last row is cut (no line end)");
