@@ -1,5 +1,7 @@
 // Example mechanisms against what can be derived for them by hand.
+#include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <map>
 
 #include "analysis/absorber.hpp"
@@ -280,4 +282,33 @@ TEST(Examples, AmiriRobustnessStudiesMoveEachParameterByTheirStatedFactors) {
       EXPECT_TRUE(simulate(m, ws, rec).status.ok);
     }
   }
+}
+
+TEST(Examples, EveryStudyFileBuildsEveryRunWithItsKeptChannels) {
+  // Each studies/*.yaml as lash sweep reads it: every run's model loads with its overrides, and
+  // every kept channel (metrics, sections, series) is a channel of some run's model (a case may
+  // lack one, as a rigid rod has no stress: its metric is then absent; lash sweep checks the
+  // first run's before it starts). Each study has a claims or figures module.
+  namespace fs = std::filesystem;
+  int studies = 0;
+  for (const auto& entry : fs::directory_iterator(std::string(LASH_SOURCE_DIR) + "/studies")) {
+    if (entry.path().extension() != ".yaml") continue;
+    SCOPED_TRACE(entry.path().filename().string());
+    ++studies;
+    const StudySpec spec = load_study_file(entry.path().string());
+    EXPECT_TRUE(fs::exists(entry.path().parent_path() / "claims" /
+                           (entry.path().stem().string() + ".py")));
+    std::map<std::string, int> found;  // kept channel -> runs whose model has it
+    for (const auto* list : {&spec.channels, &spec.section_channels, &spec.series})
+      for (const std::string& c : *list) found[c] = 0;
+    for (const StudyRun& r : study_runs(spec)) {
+      Model m;
+      ASSERT_NO_THROW(m = load_model_text(spec.model_texts.at(r.model), r.model, r.overrides).model)
+          << "run " << r.index;
+      for (const auto& c : channel_info(m, Workspace(m)))
+        if (found.count(c.name)) ++found[c.name];
+    }
+    for (const auto& [c, n] : found) EXPECT_GT(n, 0) << "no run has the kept channel " << c;
+  }
+  EXPECT_GE(studies, 17);
 }
