@@ -254,6 +254,59 @@ TEST(FlexibleLink, ConstraintRowsOnALinkAgreeWithFiniteDifferences) {
   }
 }
 
+TEST(FlexibleLink, ATorsionalSpringAtItsPinHoldsATipLoadAsTheClosedFormSays) {
+  // The bar pinned at end A to the ground, no gravity, a torsional spring-damper between the
+  // ground and the bar's axis at A (k = 100 N·m/rad, c near critical for the swing), a transverse
+  // force F = 1 N at its end B raised smoothly over 0.3 s, Kelvin–Voigt damping (BDF). Static
+  // equilibrium: the spring turns the axis at A by θ_A = FL/k and the bar bends as a cantilever
+  // from there, so the tip sits at L θ_A + FL³/(3EI) and the spring's torque is FL.
+  const double k = 100.0, force = 1.0, ei = kE * kB * kH * kH * kH / 12.0;
+  std::ostringstream s;
+  s << "ground: {markers: {O: [0, 0]}}\nbodies:\n  bar:\n" << bar(kE, 2, "      damping: 0.01\n")
+    << "joints:\n  pin: {type: revolute, journal: bar.A, bearing: ground.O}\n"
+       "loads:\n  spring: {type: torsional_spring_damper, bodies: [ground, bar.A], stiffness: "
+    << k << ", damping: 8.5}\n"
+       "  push: {type: force, point: bar.B, fy: \"step5(time, 0, 0, 0.3, " << force << ")\"}\n"
+       "sensors:\n  tip: {type: displacement, at: bar.B, axis: [0, 1], frame: ground}\n"
+       "solver: {integrator: bdf, rtol: 1.0e-8, atol: 1.0e-11, end_time: 1.0, output_interval: 0.01}\n";
+  const SimRun r = run_text(s.str());
+  ASSERT_TRUE(r.result.status.ok) << r.result.status.message;
+  const double tip = kL * force * kL / k + force * kL * kL * kL / (3 * ei);
+  EXPECT_NEAR((*r.rec)["tip.x"].back(), tip, 5e-3 * tip);
+  EXPECT_NEAR((*r.rec)["spring.torque"].back(), force * kL, 5e-3 * force * kL);
+  // Energy: what the force put in is stored in the spring and the bar or dissipated.
+  const auto& bal = (*r.rec)["energy.balance"];
+  EXPECT_LT(max_abs_diff(bal, std::vector<double>(bal.size(), bal.front())),
+            1e-6 * force * tip);
+}
+
+TEST(FlexibleLink, ATipTorqueBendsAClampedLinkIntoTheClosedFormArc) {
+  // The bar clamped at A to the ground (E = 70 GPa, EI = 116.7 N·m²), a torque M at its end B
+  // raised smoothly over 0.3 s, Kelvin–Voigt damping to let it settle (BDF). Pure bending: a
+  // circular arc of radius ρ = EI/M, so the tip turns by θ = ML/EI = 0.05 rad and sits at
+  // (ρ sin θ, ρ(1 − cos θ)) from A. Sensors read the tip along the ground's y and along the
+  // link's own transverse axis there, which turns with it: −x_B sin θ + y_B cos θ.
+  const double ei = kE * kB * kH * kH * kH / 12.0, theta = 0.05, moment = theta * ei / kL;
+  const double rho = ei / moment;
+  std::ostringstream s;
+  s << "ground: {markers: {O: [0, 0]}}\nbodies:\n  bar:\n" << bar(kE, 4, "      damping: 0.01\n")
+    << "joints:\n  clamp: {type: fixed, base: ground.O, attached: bar.A}\n"
+       "loads:\n  tip: {type: torque, body: bar.B, torque: \"step5(time, 0, 0, 0.3, " << moment
+    << ")\"}\n"
+       "sensors:\n"
+       "  tip_y: {type: displacement, at: bar.B, axis: [0, 1], frame: ground}\n"
+       "  tip_n: {type: displacement, at: bar.B, axis: [0, 1]}\n"
+       "solver: {integrator: bdf, rtol: 1.0e-8, atol: 1.0e-11, end_time: 1.5, output_interval: 0.01}\n";
+  const SimRun r = run_text(s.str());
+  ASSERT_TRUE(r.result.status.ok) << r.result.status.message;
+  const double x = rho * std::sin(theta), y = rho * (1 - std::cos(theta));
+  EXPECT_NEAR((*r.rec)["tip_y.x"].back(), y, 5e-3 * y);
+  EXPECT_NEAR((*r.rec)["tip_n.x"].back(), -x * std::sin(theta) + y * std::cos(theta), 5e-3 * y);
+  // The torque's work is stored as strain energy, M²L/(2EI), once it has settled.
+  EXPECT_NEAR((*r.rec)["bar.strain_energy"].back(), moment * moment * kL / (2 * ei),
+              1e-2 * moment * moment * kL / (2 * ei));
+}
+
 TEST(FlexibleLink, TheModelFileNamesWhatAFlexibleLinkCannotTake) {
   static const std::string kSolver = "solver: {end_time: 0.1}\n";
   auto problems = [](const std::string& yaml) {
@@ -275,9 +328,18 @@ TEST(FlexibleLink, TheModelFileNamesWhatAFlexibleLinkCannotTake) {
                      "joints:\n  j: {type: translational, guide: ground.O, slider: bar.A}\n")
                 .find("translational joint needs the axes of a rigid body"),
             std::string::npos);
-  // A torque.
+  // A torque, or a torsional spring, on the link without the point it acts at.
   EXPECT_NE(problems(head + bar(1e9, 2) + "loads:\n  t: {type: torque, body: bar, torque: 1}\n")
-                .find("torque load needs a rigid body"),
+                .find("name the point it acts at, as bar.MARKER"),
+            std::string::npos);
+  EXPECT_NE(problems(head + bar(1e9, 2) +
+                     "loads:\n  t: {type: torsional_spring_damper, bodies: [ground, bar], stiffness: 1}\n")
+                .find("name the point it acts at"),
+            std::string::npos);
+  // A bushing.
+  EXPECT_NE(problems(head + bar(1e9, 2) +
+                     "loads:\n  b: {type: bushing, from: ground.O, to: bar.A, stiffness: 1}\n")
+                .find("bushing load needs a rigid body's axes"),
             std::string::npos);
   // Mass and density that disagree.
   EXPECT_NE(problems(head + "    mass: 1.0\n" + bar(1e9, 2)).find("differs from density"),

@@ -49,8 +49,9 @@ class Checker {
   /// The element kinds a flexible link takes, for messages.
   static constexpr const char* kOnFlexible =
       "a flexible link takes revolute joints (with or without clearance), fixed joints to a rigid "
-      "body or the ground (a clamped end), distance joints, forces, spring-dampers and sensors "
-      "with axes in the ground's frame; pin a short rigid body to it for the rest";
+      "body or the ground (a clamped end), distance joints, forces, torques, spring-dampers, "
+      "torsional spring-dampers and sensors at its markers; pin a short rigid body to it for the "
+      "rest";
   std::string body_name(int b) const { return b == kGround ? "ground" : m_.bodies[b].name; }
 
   void names() {
@@ -225,22 +226,26 @@ class Checker {
   void load(Load& l) {
     const std::string el = "load '" + l.name + "'";
     const bool on_flexible =
-        l.type == LoadType::torque ? valid_body(l.body_a) && flexible(l.body_a)
-        : l.type == LoadType::torsional_spring_damper
-            ? (valid_body(l.body_a) && flexible(l.body_a)) || (valid_body(l.body_b) && flexible(l.body_b))
-        : l.type == LoadType::bushing
-            ? (valid_body(l.a.body) && flexible(l.a.body)) || (valid_body(l.b.body) && flexible(l.b.body))
-            : false;
+        l.type == LoadType::bushing &&
+        ((valid_body(l.a.body) && flexible(l.a.body)) || (valid_body(l.b.body) && flexible(l.b.body)));
     if (on_flexible)
-      return error(el, std::string("a ") + kind_of(l).name + " load needs a rigid body's angle or "
-                       "axes; " + kOnFlexible);
+      return error(el, std::string("a ") + kind_of(l).name + " load needs a rigid body's axes; " +
+                       kOnFlexible);
+    // A torque or a torsional spring on a flexible link acts at a point of it (its axis there).
+    auto at_point = [&](int body, const PointRef& p) {
+      if (valid_body(body) && flexible(body) && (p.body != body || p.label.find('.') == std::string::npos))
+        error(el, "body '" + body_name(body) + "' is a flexible link: name the point it acts at, "
+                  "as " + body_name(body) + ".MARKER (its axis there turns)");
+    };
+    if (l.type == LoadType::torque) at_point(l.body_a, l.a);
+    if (l.type == LoadType::torsional_spring_damper) at_point(l.body_a, l.a), at_point(l.body_b, l.b);
     switch (l.type) {
       case LoadType::force:
         if (!valid_body(l.a.body)) error(el, "body out of range");
         break;
       case LoadType::torque:
         if (!valid_body(l.body_a)) return error(el, "body out of range");
-        if (!rotates(l.body_a))
+        if (!rotates(l.body_a) && !flexible(l.body_a))
           error(el, "body '" + body_name(l.body_a) + "' is a point mass: it takes no torque");
         break;
       case LoadType::spring_damper:
@@ -253,7 +258,7 @@ class Checker {
         break;
       case LoadType::torsional_spring_damper:
         if (!valid_body(l.body_a) || !valid_body(l.body_b)) return error(el, "body out of range");
-        if (!rotates(l.body_a) || !rotates(l.body_b))
+        if ((!rotates(l.body_a) && !flexible(l.body_a)) || (!rotates(l.body_b) && !flexible(l.body_b)))
           error(el, "a torsional spring needs two rotating bodies (a point mass has no angle)");
         if (std::isnan(l.angle0))
           l.angle0 = initial_angle(m_, l.body_b) - initial_angle(m_, l.body_a);
@@ -289,9 +294,7 @@ class Checker {
     if (!(n > 0) || !std::isfinite(n)) error(el, "axis must be a non-zero vector");
     else s.axis /= n;
     if (s.mass < 0 || !std::isfinite(s.mass)) error(el, "mass must be >= 0 kg");
-    if (valid_body(s.at.body) && flexible(s.at.body) && s.body_axis)
-      error(el, "body '" + body_name(s.at.body) + "' is a flexible link, which has no body "
-                "axes: give its axis in the ground's frame (frame: ground)");
+
   }
 
   void mount_sensor_masses() {

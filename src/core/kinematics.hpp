@@ -168,6 +168,13 @@ inline double apply_point_torque(Eigen::VectorXd& g, const PointKin& p, double t
   return tau * p.omega;
 }
 
+/// The angle of the material at the point: a rigid body's φ (unwrapped, a coordinate); on a
+/// flexible link the direction of its axis there, atan2(r'_y, r'_x), in (−π, π]; 0 for a point
+/// mass and the ground.
+inline double point_angle(const BodyKin& k, const PointKin& p) {
+  return p.beam ? std::atan2(p.slope.y(), p.slope.x()) : k.phi;
+}
+
 /// Adds a torque τ on a rigid body to g. Returns its power τω.
 inline double apply_torque(Eigen::VectorXd& g, const BodyKin& k, double tau) {
   if (k.block.rot < 0) return 0.0;

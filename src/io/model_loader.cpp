@@ -820,8 +820,10 @@ class Loader {
       } else if (type == "torque") {
         Section s(r_, kv.second, kv.first, element, {"type", "body", "torque"});
         l.type = LoadType::torque;
+        // "body", or "link.marker": the point of a flexible link the torque acts on.
         if (!s.has("body")) r_.error(s.node(), element, "missing required key 'body'");
-        else if (auto b = body_ref(s, s.get("body"))) l.body_a = *b;
+        else if (auto t = s.text("body"))
+          if (auto a = resolve_point(s.get("body"), element, *t)) l.a = *a, l.body_a = a->body;
         expr(s, "torque", l.torque);
       } else if (type == "spring_damper") {
         Section s(r_, kv.second, kv.first, element,
@@ -841,8 +843,15 @@ class Loader {
           r_.error(bn.IsDefined() ? bn : s.node(), element,
                    "'bodies' must be a pair [body_a, body_b]");
         } else {
-          auto a = body_ref(s, bn[0]), b = body_ref(s, bn[1]);
-          if (a && b) l.body_a = *a, l.body_b = *b;  // free_angle: initial unless given
+          // Each "body", or "link.marker": the point of a flexible link whose angle counts.
+          std::optional<PointRef> a, b;
+          for (auto [node, out] : {std::pair{bn[0], &a}, std::pair{bn[1], &b}}) {
+            if (!node.IsScalar())
+              r_.error(node, element, "expected a body name, got " + Section::kind(node));
+            else
+              *out = resolve_point(node, element, node.Scalar());
+          }
+          if (a && b) l.a = *a, l.b = *b, l.body_a = a->body, l.body_b = b->body;  // free_angle: initial unless given
         }
         l.stiffness = s.number("stiffness", " (N·m/rad)", non_negative).value_or(0.0);
         l.damping = s.number("damping", " (N·m·s/rad)", non_negative).value_or(0.0);

@@ -8,8 +8,13 @@
 namespace lash::sensors {
 namespace {
 
+/// The axis in the ground's frame: fixed there, or turning with the body (on a flexible link,
+/// with its axis at the sensor's point).
 Vec2 axis_world(const Workspace& ws, const Sensor& s) {
-  return s.body_axis ? Vec2(ws.kin_of(s.at.body).A * s.axis) : s.axis;
+  if (!s.body_axis) return s.axis;
+  const BodyKin& k = ws.kin_of(s.at.body);
+  if (!k.mesh) return k.A * s.axis;
+  return rotation(point_angle(k, point_kin(k, s.at.s))) * s.axis;
 }
 
 double acceleration(const Model& m, const Workspace& ws, const Sensor& s) {

@@ -1,4 +1,5 @@
-// Torque load: an expression of time and body state acting on one rotating body. Its power τω
+// Torque load: an expression of time and body state acting on one rotating body, or on a flexible
+// link's material at a point (its axis there, kinematics.hpp: apply_point_torque). Its power τω
 // is input work.
 #include "core/elements/registry.hpp"
 
@@ -8,7 +9,7 @@ namespace {
 void apply(const Model&, Workspace& ws, const Load& l, int index) {
   LoadOutput& out = ws.load_out[index];
   out.torque = ws.load_expr[index][0].eval();
-  out.power = apply_torque(ws.g, ws.kin_of(l.body_a), out.torque);
+  out.power = apply_point_torque(ws.g, point_kin(ws.kin_of(l.body_a), l.a.s), out.torque);
   ws.input_power += out.power;
 }
 

@@ -1,6 +1,7 @@
 // Torsional spring–damper between bodies a and b (a flexural pivot, a return spring):
 // T = k(θ − θ0) + c θ̇ with θ = φ_b − φ_a, +T on a and −T on b; potential ½k(θ − θ0)²,
-// dissipated power c θ̇².
+// dissipated power c θ̇². On a flexible link the angle is that of its axis at the spring's point
+// (kinematics.hpp: point_angle), and θ − θ0 is taken within (−π, π].
 #include "core/elements/registry.hpp"
 
 namespace lash::torsional_spring_damper {
@@ -8,10 +9,13 @@ namespace {
 
 void apply(const Model&, Workspace& ws, const Load& l, int index) {
   const BodyKin &ka = ws.kin_of(l.body_a), &kb = ws.kin_of(l.body_b);
-  const double theta = kb.phi - ka.phi - l.angle0, theta_dot = kb.omega - ka.omega;
+  const PointKin pa = point_kin(ka, l.a.s), pb = point_kin(kb, l.b.s);
+  double theta = point_angle(kb, pb) - point_angle(ka, pa) - l.angle0;
+  if (pa.beam || pb.beam) theta = std::remainder(theta, 2.0 * M_PI);
+  const double theta_dot = pb.omega - pa.omega;
   LoadOutput& out = ws.load_out[index];
   out.torque = l.stiffness * theta + l.damping * theta_dot;
-  out.power = apply_torque(ws.g, ka, out.torque) + apply_torque(ws.g, kb, -out.torque);
+  out.power = apply_point_torque(ws.g, pa, out.torque) + apply_point_torque(ws.g, pb, -out.torque);
   ws.potential += 0.5 * l.stiffness * theta * theta;
   ws.dissipated_power += l.damping * theta_dot * theta_dot;
 }
