@@ -50,8 +50,8 @@ class Checker {
   static constexpr const char* kOnFlexible =
       "a flexible link takes revolute joints (with or without clearance), fixed joints to a rigid "
       "body or the ground (a clamped end), distance joints, forces, torques, spring-dampers, "
-      "torsional spring-dampers and sensors at its markers; pin a short rigid body to it for the "
-      "rest";
+      "torsional spring-dampers and sensors at its markers, and drivers of its revolute joints; "
+      "pin a short rigid body to it for the rest";
   std::string body_name(int b) const { return b == kGround ? "ground" : m_.bodies[b].name; }
 
   void names() {
@@ -205,10 +205,8 @@ class Checker {
                                           : "not revolute or translational") +
                              "; drive an ideal revolute or translational joint, or drive the "
                              "body itself (body: NAME, coordinate: phi)");
-      if (j.type == JointType::revolute && (flexible(j.a.body) || flexible(j.b.body)))
-        return error(el, "joint '" + j.name + "' holds a flexible link; drive the joint at the "
-                         "link's other end or a rigid body (body: NAME, coordinate: phi)");
-      if (j.type == JointType::revolute && (!rotates(j.a.body) || !rotates(j.b.body)))
+      if (j.type == JointType::revolute && ((!rotates(j.a.body) && !flexible(j.a.body)) ||
+                                            (!rotates(j.b.body) && !flexible(j.b.body))))
         return error(el, "joint '" + j.name + "' holds a point mass, which has no angle to drive");
       if (std::isnan(d.initial)) {
         if (j.type == JointType::revolute) {

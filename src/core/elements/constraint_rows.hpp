@@ -32,6 +32,30 @@ inline void angle_row(const Workspace& ws, int body_a, int body_b, double angle0
   if (out.gamma) (*out.gamma)[row] = fdd;
 }
 
+/// Φ = θ_b − θ_a − f within (−π, π] (1 row), θ the angle of the material at points a and b
+/// (kinematics.hpp: point_angle): a rigid body's φ, or on a flexible link the direction of its
+/// axis there, θ = atan2(r'_y, r'_x) with ∂θ/∂e = perp(r')ᵀS'/|r'|², θ̇ = r' × ṙ'/|r'|² and the
+/// velocity part of θ̈ −2θ̇ (r'·ṙ')/|r'|². Taken within (−π, π] so that a link's wrapped angle
+/// and a rigid body's unwrapped one compare; continuous where the constraint holds.
+inline void point_angle_row(const Workspace& ws, const PointRef& a, const PointRef& b, double f,
+                            double fd, double fdd, int row, ConstraintOut& out) {
+  const BodyKin &ka = ws.kin_of(a.body), &kb = ws.kin_of(b.body);
+  const PointKin pa = point_kin(ka, a.s), pb = point_kin(kb, b.s);
+  out.phi[row] = std::remainder(point_angle(kb, pb) - point_angle(ka, pa) - f, 2.0 * M_PI);
+  auto side = [&](const BodyKin& k, const PointKin& p, double sign) {
+    if (!p.beam) {
+      put_row(out.phi_q, row, k, 0, 0, sign);
+      return 0.0;
+    }
+    const double n2 = p.slope.squaredNorm();
+    put_slope_row(out.phi_q, row, p, perp(p.slope) * (sign / n2));
+    return -2.0 * p.omega * p.slope.dot(p.slope_rate) / n2;  // θ̈'s velocity part
+  };
+  const double acc_a = side(ka, pa, -1.0), acc_b = side(kb, pb, 1.0);
+  if (out.phi_dot) (*out.phi_dot)[row] = pb.omega - pa.omega - fd;
+  if (out.gamma) (*out.gamma)[row] = fdd - (acc_b - acc_a);
+}
+
 /// Φ = d_a × d_b (1 row): the directions at points a and b stay parallel, where one of the two
 /// bodies is a flexible link. On a link d is its slope r' at the point (ḋ = ṙ', no
 /// velocity-dependent acceleration); on a rigid body or the ground a unit vector fixed in it,
