@@ -305,6 +305,41 @@ TEST(FlexibleLink, ConstraintRowsOnALinkAgreeWithFiniteDifferences) {
   ASSERT_NE(speed, std::string::npos);
   text.replace(speed, text.find('\n', speed) - speed, "    motion: \"0\"");
   expect_rows_agree_with_differences(load_model_text(text, "own_pin.yaml").model, true);
+  // A link sliding on a guide that turns (its angle row and its dot row through the link's nodes).
+  expect_rows_agree_with_differences(
+      load_model_text("ground: {markers: {O: [0, 0]}}\nbodies:\n"
+                      "  arm: {mass: 1, inertia: 0.1, position: [0, 0], markers: {O: [0, 0]}}\n"
+                      "  bar:\n" + bar(kE, 2) +
+                      "joints:\n  pivot: {type: revolute, journal: arm.O, bearing: ground.O}\n"
+                      "  slide: {type: translational, guide: arm.O, slider: bar.M, axis: [1, 0]}\n"
+                      "solver: {end_time: 0.1}\n", "slide.yaml").model,
+      false);
+}
+
+TEST(FlexibleLink, ALinkSlidingOnAGuideOscillatesOnItsSpringAsARigidOne) {
+  // The bar as the slider of a translational joint along the ground's x axis (its axis at the
+  // middle kept parallel to it), pulled back by a spring of 800 N/m from 10 mm out: it moves as
+  // a whole, x = x0 + 0.01 cos ωt with ω = √(k/m) (the bar's axial modes, kHz, do not enter);
+  // its transverse position stays 0.
+  const double k = 800.0, mass = kRho * kB * kH * kL;
+  std::ostringstream s;
+  s << "ground: {markers: {O: [0, 0]}}\nbodies:\n  bar:\n" << bar(kE, 2)
+    << "joints:\n  slide: {type: translational, guide: ground.O, slider: bar.M, axis: [1, 0]}\n"
+       "loads:\n  spring: {type: spring_damper, from: ground.O, to: bar.M, stiffness: "
+    << k << ", free_length: 0.49}\n"
+       "solver: {rtol: 1.0e-9, atol: 1.0e-12, end_time: 0.2, output_interval: 0.005, "
+       "initial_state: given}\n";
+  const SimRun r = run_text(s.str());
+  ASSERT_TRUE(r.result.status.ok) << r.result.status.message;
+  const double omega = std::sqrt(k / mass);
+  const auto& t = r.rec->time;
+  const auto& x = (*r.rec)["bar.x"];
+  double worst = 0.0;
+  for (size_t i = 0; i < t.size(); ++i)
+    worst = std::max(worst, std::abs(x[i] - (0.49 + 0.01 * std::cos(omega * t[i]))));
+  EXPECT_LT(worst, 1e-5);
+  EXPECT_LT(max_abs_diff((*r.rec)["bar.y"], std::vector<double>(t.size(), 0.0)), 1e-9);
+  EXPECT_LT(max_abs_diff((*r.rec)["bar.phi"], std::vector<double>(t.size(), 0.0)), 1e-9);
 }
 
 TEST(FlexibleLink, ATorsionalSpringAtItsPinHoldsATipLoadAsTheClosedFormSays) {
@@ -376,10 +411,11 @@ TEST(FlexibleLink, TheModelFileNamesWhatAFlexibleLinkCannotTake) {
                             "{circle: 0.01}, youngs_modulus: 1e9, density: 1000}\n")
                 .find("off the link's axis"),
             std::string::npos);
-  // A translational joint.
-  EXPECT_NE(problems(head + bar(1e9, 2) +
-                     "joints:\n  j: {type: translational, guide: ground.O, slider: bar.A}\n")
-                .find("translational joint needs the axes of a rigid body"),
+  // A link as a translational joint's guide.
+  EXPECT_NE(problems("ground: {markers: {O: [0, 0]}}\nbodies:\n  block: {mass: 1, inertia: 1}\n"
+                     "  bar:\n" + bar(1e9, 2) +
+                     "joints:\n  j: {type: translational, guide: bar.A, slider: block}\n")
+                .find("cannot be a translational joint's guide"),
             std::string::npos);
   // A torque, or a torsional spring, on the link without the point it acts at.
   EXPECT_NE(problems(head + bar(1e9, 2) + "loads:\n  t: {type: torque, body: bar, torque: 1}\n")

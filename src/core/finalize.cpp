@@ -50,8 +50,8 @@ class Checker {
   static constexpr const char* kOnFlexible =
       "a flexible link takes revolute joints (with or without clearance), fixed joints to a rigid "
       "body or the ground (a clamped end), distance joints, forces, torques, spring-dampers, "
-      "torsional spring-dampers and sensors at its markers, and drivers of its revolute joints; "
-      "pin a short rigid body to it for the rest";
+      "torsional spring-dampers and sensors at its markers, drivers of its revolute joints, and "
+      "translational joints as the slider; pin a short rigid body to it for the rest";
   std::string body_name(int b) const { return b == kGround ? "ground" : m_.bodies[b].name; }
 
   void names() {
@@ -133,9 +133,10 @@ class Checker {
     const std::string el = "joint '" + j.name + "'";
     if (!valid_body(j.a.body) || !valid_body(j.b.body)) return error(el, "body out of range");
     if (j.a.body == j.b.body) error(el, "joins body '" + body_name(j.a.body) + "' to itself");
-    if ((flexible(j.a.body) || flexible(j.b.body)) && j.type == JointType::translational)
-      return error(el, std::string("a translational joint needs the axes of a rigid body; ") +
-                           kOnFlexible);
+    if (flexible(j.a.body) && j.type == JointType::translational)
+      return error(el, "a flexible link cannot be a translational joint's guide (the slider would "
+                       "run along its deforming axis); make the link the slider, or clamp a rigid "
+                       "guide to it");
     if (flexible(j.a.body) && flexible(j.b.body) && j.type == JointType::fixed)
       return error(el, "a fixed joint between two flexible links is not supported; join them "
                        "through a short rigid body");

@@ -94,7 +94,7 @@ inline void slope_row(const Workspace& ws, const PointRef& a, const PointRef& b,
 }
 
 /// Φ = (A_a v')·(r_b − r_a) − f with v' fixed in body a (1 row). Body a rigid or the ground, b
-/// rigid, a point mass or the ground (finalize).
+/// any body (on a flexible link r_b moves with its nodes, kinematics.hpp: put_point_row).
 inline void dot_row(const Workspace& ws, const PointRef& a, const PointRef& b, const Vec2& v_body,
              double f, double fd, double fdd, int row, ConstraintOut& out) {
   const BodyKin &ka = ws.kin_of(a.body), &kb = ws.kin_of(b.body);
@@ -103,11 +103,11 @@ inline void dot_row(const Workspace& ws, const PointRef& a, const PointRef& b, c
   const Vec2 d = pb.r - pa.r, dd = pb.v - pa.v;
   out.phi[row] = v.dot(d) - f;
   put_row(out.phi_q, row, ka, -v.x(), -v.y(), pv.dot(pb.r - ka.r));
-  put_row(out.phi_q, row, kb, v.x(), v.y(), v.dot(perp(pb.s)));
+  put_point_row(out.phi_q, row, pb, v);
   if (out.phi_dot) (*out.phi_dot)[row] = ka.omega * pv.dot(d) + v.dot(dd) - fd;
   if (out.gamma) {
     const double quad = -v.dot(d) * ka.omega * ka.omega + 2.0 * ka.omega * pv.dot(dd) +
-                        v.dot(pa.s * ka.omega * ka.omega - pb.s * kb.omega * kb.omega);
+                        v.dot(pb.a_vel + pa.s * ka.omega * ka.omega);
     (*out.gamma)[row] = fdd - quad;
   }
 }

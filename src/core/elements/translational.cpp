@@ -1,19 +1,22 @@
 // Translational joint (prismatic): body b slides along `axis` fixed in body a. Rows: relative
-// angle locked (omitted when the slider is a point mass, which has no angle) and
-// perp(A_a axis)·(r_b − r_a) = 0.
+// angle locked (omitted when the slider is a point mass, which has no angle; on a flexible link
+// the angle of its axis at the slider's point) and perp(A_a axis)·(r_b − r_a) = 0.
 #include "core/elements/constraint_rows.hpp"
 
 namespace lash::translational {
 namespace {
 
 bool locks_angle(const Model& m, const Joint& j) {
-  return j.b.body == kGround || m.bodies[j.b.body].rotates();
+  return j.b.body == kGround || m.bodies[j.b.body].rotates() || m.bodies[j.b.body].flexible();
 }
 
 int rows(const Model& m, const Joint& j) { return locks_angle(m, j) ? 2 : 1; }
 
 void constrain(const Model& m, const Workspace& ws, const Joint& j, int row, ConstraintOut& out) {
-  if (locks_angle(m, j)) angle_row(ws, j.a.body, j.b.body, j.angle0, 0, 0, 0, row++, out);
+  if (locks_angle(m, j) && ws.kin_of(j.b.body).mesh)
+    point_angle_row(ws, j.a, j.b, j.angle0, 0, 0, row++, out);
+  else if (locks_angle(m, j))
+    angle_row(ws, j.a.body, j.b.body, j.angle0, 0, 0, 0, row++, out);
   dot_row(ws, j.a, j.b, perp(j.axis), 0, 0, 0, row, out);
 }
 
