@@ -314,6 +314,57 @@ TEST(FlexibleLink, ConstraintRowsOnALinkAgreeWithFiniteDifferences) {
                       "  slide: {type: translational, guide: arm.O, slider: bar.M, axis: [1, 0]}\n"
                       "solver: {end_time: 0.1}\n", "slide.yaml").model,
       false);
+  // Two links welded into an L (fixed joint, 90° between their axes), pinned to the ground.
+  expect_rows_agree_with_differences(
+      load_model_text("ground: {markers: {O: [0, 0]}}\nbodies:\n  bar:\n" + bar(kE, 2) +
+                      "  post:\n    position: [1, 0.25]\n    angle_deg: 90\n"
+                      "    markers: {A: [-0.25, 0], B: [0.25, 0]}\n"
+                      "    flexible: {length: 0.5, elements: 1, section: {rectangle: [0.02, 0.01]}, "
+                      "youngs_modulus: 7e10, density: 2700}\n"
+                      "joints:\n  pin: {type: revolute, journal: bar.A, bearing: ground.O}\n"
+                      "  corner: {type: fixed, base: bar.B, attached: post.A}\n"
+                      "solver: {end_time: 0.1}\n", "ell.yaml").model,
+      false);
+}
+
+TEST(FlexibleLink, TwoWeldedHalvesBendAsOneCantilever) {
+  // Two 0.5 m halves of the bar welded end to end (a fixed joint between two links), clamped to
+  // the ground at A, a transverse tip force F = 1 N raised over 0.3 s, Kelvin–Voigt damping (BDF):
+  // the tip settles at FL³/(3EI), as one 1 m cantilever's.
+  const double force = 1.0, ei = kE * kB * kH * kH * kH / 12.0;
+  auto half = [](const char* name, double x) {
+    std::ostringstream s;
+    s << "  " << name << ":\n    position: [" << x << ", 0]\n    markers: {A: [-0.25, 0], B: [0.25, 0]}\n"
+      << "    flexible: {length: 0.5, elements: 1, section: {rectangle: [0.02, 0.01]}, "
+         "youngs_modulus: " << kE << ", density: 2700, damping: 0.01}\n";
+    return s.str();
+  };
+  std::ostringstream s;
+  s << "ground: {markers: {O: [0, 0]}}\nbodies:\n" << half("inner", 0.25) << half("outer", 0.75)
+    << "joints:\n  clamp: {type: fixed, base: ground.O, attached: inner.A}\n"
+       "  weld: {type: fixed, base: inner.B, attached: outer.A}\n"
+       "loads:\n  push: {type: force, point: outer.B, fy: \"step5(time, 0, 0, 0.3, " << force << ")\"}\n"
+       "sensors:\n  tip: {type: displacement, at: outer.B, axis: [0, 1], frame: ground}\n"
+       "solver: {integrator: bdf, rtol: 1.0e-8, atol: 1.0e-11, end_time: 1.0, output_interval: 0.01}\n";
+  const SimRun r = run_text(s.str());
+  ASSERT_TRUE(r.result.status.ok) << r.result.status.message;
+  const double tip = force * kL * kL * kL / (3 * ei);
+  EXPECT_NEAR((*r.rec)["tip.x"].back(), tip, 5e-3 * tip);
+  // Two links welded at 90° (an L, clamped at its foot, no load) keep their angle: at rest and
+  // unstrained, as built.
+  const SimRun ell = run_text(
+      "ground: {markers: {O: [0, 0]}}\nbodies:\n  bar:\n" + bar(kE, 2) +
+      "  post:\n    position: [1, 0.25]\n    angle_deg: 90\n"
+      "    markers: {A: [-0.25, 0], B: [0.25, 0]}\n"
+      "    flexible: {length: 0.5, elements: 1, section: {rectangle: [0.02, 0.01]}, "
+      "youngs_modulus: 7e10, density: 2700}\n"
+      "joints:\n  foot: {type: fixed, base: ground.O, attached: bar.A}\n"
+      "  corner: {type: fixed, base: bar.B, attached: post.A}\n"
+      "solver: {end_time: 0.01, output_interval: 0.005}\n");
+  ASSERT_TRUE(ell.result.status.ok) << ell.result.status.message;
+  for (const char* c : {"bar.strain_energy", "post.strain_energy"})
+    EXPECT_LT(max_abs_diff((*ell.rec)[c], std::vector<double>((*ell.rec)[c].size(), 0.0)), 1e-12) << c;
+  EXPECT_NEAR((*ell.rec)["post.phi"].back(), M_PI / 2, 1e-9);
 }
 
 TEST(FlexibleLink, ALinkSlidingOnAGuideOscillatesOnItsSpringAsARigidOne) {
@@ -429,6 +480,12 @@ TEST(FlexibleLink, TheModelFileNamesWhatAFlexibleLinkCannotTake) {
   EXPECT_NE(problems(head + bar(1e9, 2) +
                      "loads:\n  b: {type: bushing, from: ground.O, to: bar.A, stiffness: 1}\n")
                 .find("bushing load needs a rigid body's axes"),
+            std::string::npos);
+  // A fixed joint from a link to a point mass.
+  EXPECT_NE(problems("ground: {markers: {O: [0, 0]}}\nbodies:\n  dot: {mass: 1, position: [0, 0]}\n"
+                     "  bar:\n" + bar(1e9, 2) +
+                     "joints:\n  j: {type: fixed, base: dot, attached: bar.A}\n")
+                .find("not to a point mass"),
             std::string::npos);
   // Mass and density that disagree.
   EXPECT_NE(problems(head + "    mass: 1.0\n" + bar(1e9, 2)).find("differs from density"),

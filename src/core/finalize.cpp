@@ -50,8 +50,9 @@ class Checker {
   static constexpr const char* kOnFlexible =
       "a flexible link takes revolute joints (with or without clearance), fixed joints to a rigid "
       "body or the ground (a clamped end), distance joints, forces, torques, spring-dampers, "
-      "torsional spring-dampers and sensors at its markers, drivers of its revolute joints, and "
-      "translational joints as the slider; pin a short rigid body to it for the rest";
+      "torsional spring-dampers and sensors at its markers, drivers of its revolute joints, "
+      "translational joints as the slider, and fixed joints to other links; pin a short rigid "
+      "body to it for the rest";
   std::string body_name(int b) const { return b == kGround ? "ground" : m_.bodies[b].name; }
 
   void names() {
@@ -137,9 +138,6 @@ class Checker {
       return error(el, "a flexible link cannot be a translational joint's guide (the slider would "
                        "run along its deforming axis); make the link the slider, or clamp a rigid "
                        "guide to it");
-    if (flexible(j.a.body) && flexible(j.b.body) && j.type == JointType::fixed)
-      return error(el, "a fixed joint between two flexible links is not supported; join them "
-                       "through a short rigid body");
     if (j.clearance) {
       Clearance& c = *j.clearance;
       if (j.type != JointType::revolute) error(el, "only a revolute joint can have clearance");
@@ -166,7 +164,7 @@ class Checker {
         if (flexible(j.a.body) || flexible(j.b.body)) {
           // A clamped end: the link's axis at the point keeps its initial angle to the other body.
           const int rigid = flexible(j.a.body) ? j.b.body : j.a.body;
-          if (rigid != kGround && !m_.bodies[rigid].rotates())
+          if (rigid != kGround && !m_.bodies[rigid].rotates() && !m_.bodies[rigid].flexible())
             error(el, "a fixed joint clamps a flexible link to a rigid body or the ground, not to "
                       "a point mass");
           break;

@@ -57,22 +57,24 @@ inline void point_angle_row(const Workspace& ws, const PointRef& a, const PointR
 }
 
 /// Φ = d_a × d_b (1 row): the directions at points a and b stay parallel, where one of the two
-/// bodies is a flexible link. On a link d is its slope r' at the point (ḋ = ṙ', no
-/// velocity-dependent acceleration); on a rigid body or the ground a unit vector fixed in it,
-/// A w (ḋ = ω perp(d), d̈ = α perp(d) − ω² d), with w at angle `angle0` (rigid body a) or −angle0
-/// (rigid body b) from its x axis, angle0 = φ_b − φ_a at the initial poses (a link's φ: its axis).
-/// ∂Φ/∂d_a = −perp(d_b), ∂Φ/∂d_b = perp(d_a).
+/// bodies (or both) is a flexible link. On a link d is its slope r' at the point (ḋ = ṙ', no
+/// velocity-dependent acceleration), turned by angle0 on link a when b is a link too; on a rigid
+/// body or the ground a unit vector fixed in it, A w (ḋ = ω perp(d), d̈ = α perp(d) − ω² d), with
+/// w at angle `angle0` (rigid body a) or −angle0 (rigid body b) from its x axis, angle0 = φ_b − φ_a
+/// at the initial poses (a link's φ: its axis). ∂Φ/∂d_a = −perp(d_b), ∂Φ/∂d_b = perp(d_a).
 inline void slope_row(const Workspace& ws, const PointRef& a, const PointRef& b, double angle0,
                       int row, ConstraintOut& out) {
   const BodyKin &ka = ws.kin_of(a.body), &kb = ws.kin_of(b.body);
   const PointKin pa = point_kin(ka, a.s), pb = point_kin(kb, b.s);
   struct Side {
     Vec2 d, d_dot, d_acc_vel;  // direction, its rate, the velocity part of its acceleration
+    Eigen::Matrix2d turn = Eigen::Matrix2d::Identity();  // a link's d = turn · r'
   };
-  auto side = [](const BodyKin& k, const PointKin& p, double w_angle) {
+  auto side = [](const BodyKin& k, const PointKin& p, double w_angle, bool turn_link) {
     Side s;
     if (p.beam) {
-      s.d = p.slope, s.d_dot = p.slope_rate, s.d_acc_vel = Vec2::Zero();
+      if (turn_link) s.turn = rotation(w_angle);
+      s.d = s.turn * p.slope, s.d_dot = s.turn * p.slope_rate, s.d_acc_vel = Vec2::Zero();
     } else {
       s.d = k.A * Vec2(std::cos(w_angle), std::sin(w_angle));
       s.d_dot = k.omega * perp(s.d);
@@ -80,10 +82,10 @@ inline void slope_row(const Workspace& ws, const PointRef& a, const PointRef& b,
     }
     return s;
   };
-  const Side sa = side(ka, pa, angle0), sb = side(kb, pb, -angle0);
+  const Side sa = side(ka, pa, angle0, pb.beam), sb = side(kb, pb, -angle0, false);
   out.phi[row] = cross(sa.d, sb.d);
   const Vec2 ga = -perp(sb.d), gb = perp(sa.d);  // ∂Φ/∂d_a, ∂Φ/∂d_b
-  if (pa.beam) put_slope_row(out.phi_q, row, pa, ga);
+  if (pa.beam) put_slope_row(out.phi_q, row, pa, sa.turn.transpose() * ga);
   else put_row(out.phi_q, row, ka, 0, 0, ga.dot(perp(sa.d)));
   if (pb.beam) put_slope_row(out.phi_q, row, pb, gb);
   else put_row(out.phi_q, row, kb, 0, 0, gb.dot(perp(sb.d)));
