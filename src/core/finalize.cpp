@@ -50,9 +50,9 @@ class Checker {
   static constexpr const char* kOnFlexible =
       "a flexible link takes revolute joints (with or without clearance), fixed joints to a rigid "
       "body or the ground (a clamped end), distance joints, forces, torques, spring-dampers, "
-      "torsional spring-dampers and sensors at its markers, drivers of its revolute joints, "
-      "translational joints as the slider, and fixed joints to other links; pin a short rigid "
-      "body to it for the rest";
+      "torsional spring-dampers, bushings and sensors at its markers, drivers of its revolute "
+      "joints, translational joints as the slider, and fixed joints to other links; pin a short "
+      "rigid body to it for the rest";
   std::string body_name(int b) const { return b == kGround ? "ground" : m_.bodies[b].name; }
 
   void names() {
@@ -222,12 +222,6 @@ class Checker {
 
   void load(Load& l) {
     const std::string el = "load '" + l.name + "'";
-    const bool on_flexible =
-        l.type == LoadType::bushing &&
-        ((valid_body(l.a.body) && flexible(l.a.body)) || (valid_body(l.b.body) && flexible(l.b.body)));
-    if (on_flexible)
-      return error(el, std::string("a ") + kind_of(l).name + " load needs a rigid body's axes; " +
-                       kOnFlexible);
     // A torque or a torsional spring on a flexible link acts at a point of it (its axis there).
     auto at_point = [&](int body, const PointRef& p) {
       if (valid_body(body) && flexible(body) && (p.body != body || p.label.find('.') == std::string::npos))
@@ -269,9 +263,10 @@ class Checker {
         l.body_b = l.b.body;
         if (l.frame_body != kGround && l.frame_body != l.a.body && l.frame_body != l.b.body)
           error(el, "frame must be one of the two bodies it joins, or ground");
-        else if (!rotates(l.frame_body))
+        else if (!rotates(l.frame_body) && !flexible(l.frame_body))
           error(el, "frame '" + body_name(l.frame_body) + "' is a point mass, which has no axes");
-        if ((l.stiffness != 0.0 || l.damping != 0.0) && (!rotates(l.a.body) || !rotates(l.b.body)))
+        if ((l.stiffness != 0.0 || l.damping != 0.0) &&
+            ((!rotates(l.a.body) && !flexible(l.a.body)) || (!rotates(l.b.body) && !flexible(l.b.body))))
           error(el, "a torsional part needs two rotating bodies (a point mass has no angle)");
         if (std::isnan(l.angle0))
           l.angle0 = initial_angle(m_, l.body_b) - initial_angle(m_, l.body_a);

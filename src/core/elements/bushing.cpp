@@ -5,6 +5,10 @@
 // V = Σ ½ k_i d_i² + ½ k_t θ². Because u_i turns with the frame body, F acts on the frame body
 // at the other body's point: then the generalised force is exactly −∂V/∂q (the moment of F
 // about the frame includes the turning of u_i), and the dissipated power is Σ c_i ḋ_i² + c_t θ̇².
+// A flexible link as the frame: its axes are those of its axis at its own point (kinematics.hpp:
+// point_angle), F acts at the two points, and the turning of u_i is the torque
+// −Σ (k_i d_i + c_i ḋ_i) perp(u_i)·d on the link's axis there (∂d_i/∂θ = perp(u_i)·d). On a link
+// the torsional part's angles are its axis' at the point, θ within (−π, π].
 #include "core/elements/registry.hpp"
 
 namespace lash::bushing {
@@ -15,30 +19,43 @@ void apply(const Model&, Workspace& ws, const Load& l, int index) {
   const BodyKin& kf = ws.kin_of(l.frame_body);
   const PointKin pa = point_kin(ka, l.a.s), pb = point_kin(kb, l.b.s);
   const Vec2 d = pb.r - pa.r, d_dot = pb.v - pa.v;
+  // The frame's axes: a rigid body's, or a link's axis at its own point.
+  const bool frame_link = kf.mesh != nullptr;
+  const PointKin& pf = l.frame_body == l.a.body ? pa : pb;
+  const Eigen::Matrix2d axes = frame_link ? rotation(point_angle(kf, pf)) : kf.A;
+  const double omega_f = frame_link ? pf.omega : kf.omega;
   Vec2 f = Vec2::Zero(), defl;
-  double dissipated = 0.0, potential = 0.0;
+  double dissipated = 0.0, potential = 0.0, turning = 0.0;
   for (int i = 0; i < 2; ++i) {
-    const Vec2 u = kf.A.col(i);
-    const double di = u.dot(d), di_dot = u.dot(d_dot) + kf.omega * perp(u).dot(d);
+    const Vec2 u = axes.col(i);
+    const double di = u.dot(d), di_dot = u.dot(d_dot) + omega_f * perp(u).dot(d);
     const double k = l.stiffness_xy[i], c = l.damping_xy[i];
     f += (k * di + c * di_dot) * u;
+    turning -= (k * di + c * di_dot) * perp(u).dot(d);
     defl[i] = di;
     potential += 0.5 * k * di * di;
     dissipated += c * di_dot * di_dot;
   }
-  // Application points: the frame body takes its force at the other body's point.
-  const bool frame_a = l.frame_body == l.a.body && l.a.body != kGround;
-  const bool frame_b = !frame_a && l.frame_body == l.b.body && l.b.body != kGround;
-  const PointKin qa = frame_a ? point_kin(ka, ka.A.transpose() * (pb.r - ka.r)) : pa;
-  const PointKin qb = frame_b ? point_kin(kb, kb.A.transpose() * (pa.r - kb.r)) : pb;
   LoadOutput& out = ws.load_out[index];
   out.force = -f;
   out.deflection = defl;
-  out.power = apply_force(ws.g, qa, f) + apply_force(ws.g, qb, -f);
+  if (frame_link) {
+    out.power = apply_force(ws.g, pa, f) + apply_force(ws.g, pb, -f) +
+                apply_point_torque(ws.g, pf, turning);
+  } else {
+    // Application points: the frame body takes its force at the other body's point.
+    const bool frame_a = l.frame_body == l.a.body && l.a.body != kGround;
+    const bool frame_b = !frame_a && l.frame_body == l.b.body && l.b.body != kGround;
+    const PointKin qa = frame_a ? point_kin(ka, ka.A.transpose() * (pb.r - ka.r)) : pa;
+    const PointKin qb = frame_b ? point_kin(kb, kb.A.transpose() * (pa.r - kb.r)) : pb;
+    out.power = apply_force(ws.g, qa, f) + apply_force(ws.g, qb, -f);
+  }
   // Torsional part.
-  const double theta = kb.phi - ka.phi - l.angle0, theta_dot = kb.omega - ka.omega;
+  double theta = point_angle(kb, pb) - point_angle(ka, pa) - l.angle0;
+  if (pa.beam || pb.beam) theta = std::remainder(theta, 2.0 * M_PI);
+  const double theta_dot = pb.omega - pa.omega;
   out.torque = l.stiffness * theta + l.damping * theta_dot;
-  out.power += apply_torque(ws.g, ka, out.torque) + apply_torque(ws.g, kb, -out.torque);
+  out.power += apply_point_torque(ws.g, pa, out.torque) + apply_point_torque(ws.g, pb, -out.torque);
   potential += 0.5 * l.stiffness * theta * theta;
   dissipated += l.damping * theta_dot * theta_dot;
   ws.potential += potential;
