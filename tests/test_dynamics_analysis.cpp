@@ -138,4 +138,20 @@ TEST(Verdict, WeighsTheEvidence) {
   EXPECT_NE(none.evidence.back().find("no Lyapunov exponent"), std::string::npos);
   // λT exactly at the threshold is not chaotic.
   EXPECT_EQ(classify_motion(0.1 / 0.5, 0.5, 30, 30, 0).kind, "quasi-periodic");
+  // Without an exponent the spectrum decides: broadband share above 0.5 chaotic, below 0.1
+  // quasi-periodic, in between undetermined; with one, the exponent decides and the spectrum's
+  // agreement is stated.
+  const double nan = std::nan("");
+  EXPECT_EQ(classify_motion(nan, 0.012, 30, 30, 4, 0.0, 0.9).kind, "chaotic");
+  EXPECT_EQ(classify_motion(nan, 0.012, 30, 30, 4, 0.0, 0.02).kind, "quasi-periodic");
+  EXPECT_EQ(classify_motion(nan, 0.012, 30, 30, 4, 0.0, 0.3).kind, "undetermined");
+  EXPECT_EQ(classify_motion(nan, 0.012, 30, 30, 4, 0.0, 0.51).kind, "chaotic");
+  EXPECT_EQ(classify_motion(nan, 0.012, 30, 30, 4, 0.0, 0.099).kind, "quasi-periodic");
+  const Verdict against = classify_motion(50.0, 0.012, 30, 30, 4, 0.0, 0.02);
+  EXPECT_EQ(against.kind, "chaotic");
+  EXPECT_EQ(against.evidence.back(), "the spectrum disagrees; the exponent decides");
+  EXPECT_EQ(classify_motion(50.0, 0.012, 30, 30, 4, 0.0, 0.9).evidence.back(),
+            "the spectrum agrees; the exponent decides");
+  // Recurring points still decide first.
+  EXPECT_EQ(classify_motion(nan, 0.012, 2, 20, 0, 0.0, 0.9).kind, "periodic");
 }

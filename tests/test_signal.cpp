@@ -99,3 +99,57 @@ TEST(Spectrum, ConcurrentSpectraEqualSerialOnes) {
     }
   }
 }
+
+TEST(Spectrum, BroadbandShareTellsLinesFromAContinuousSpectrum) {
+  // 16384 samples every 10 ms. Periodic and quasi-periodic signals put their power in lines;
+  // white noise and the Lorenz system's x (σ = 10, ρ = 28, β = 8/3, chaotic) spread it.
+  const int n = 16384;
+  const double dt = 0.01;
+  std::vector<double> qp(n), spikes(n), noise(n), lorenz(n);
+  unsigned long long seed = 12345;
+  auto uniform = [&] {  // a 64-bit linear congruential generator (Knuth's MMIX constants)
+    seed = seed * 6364136223846793005ULL + 1442695040888963407ULL;
+    return static_cast<double>(seed >> 11) / 9007199254740992.0 - 0.5;
+  };
+  for (int i = 0; i < n; ++i) {
+    const double t = i * dt;
+    qp[i] = std::sin(2 * M_PI * 3.1 * t) + 0.5 * std::sin(2 * M_PI * 3.1 * std::sqrt(2.0) * t);
+    const double phase = std::fmod(t, 0.37) - 0.185;  // an impact every 0.37 s, 10 ms wide
+    spikes[i] = std::exp(-phase * phase / (2 * 0.005 * 0.005));
+    noise[i] = uniform();
+  }
+  // Lorenz by classical Runge–Kutta, 10 steps per sample, after a transient of 50 time units.
+  double y[3] = {1, 1, 20};
+  auto f = [](const double* a, double* d) {
+    d[0] = 10 * (a[1] - a[0]);
+    d[1] = a[0] * (28 - a[2]) - a[1];
+    d[2] = a[0] * a[1] - 8.0 / 3.0 * a[2];
+  };
+  auto step = [&](double h) {
+    double k1[3], k2[3], k3[3], k4[3], tmp[3];
+    f(y, k1);
+    for (int j = 0; j < 3; ++j) tmp[j] = y[j] + 0.5 * h * k1[j];
+    f(tmp, k2);
+    for (int j = 0; j < 3; ++j) tmp[j] = y[j] + 0.5 * h * k2[j];
+    f(tmp, k3);
+    for (int j = 0; j < 3; ++j) tmp[j] = y[j] + h * k3[j];
+    f(tmp, k4);
+    for (int j = 0; j < 3; ++j) y[j] += h / 6 * (k1[j] + 2 * k2[j] + 2 * k3[j] + k4[j]);
+  };
+  for (int i = 0; i < 50000; ++i) step(1e-3);
+  for (int i = 0; i < n; ++i) {
+    lorenz[i] = y[0];
+    for (int k = 0; k < 10; ++k) step(dt / 10);
+  }
+  const double b_qp = broadband_share(amplitude_spectrum(qp, dt));
+  const double b_spikes = broadband_share(amplitude_spectrum(spikes, dt));
+  const double b_noise = broadband_share(amplitude_spectrum(noise, dt));
+  const double b_lorenz = broadband_share(amplitude_spectrum(lorenz, dt));
+  std::printf("broadband share: quasi-periodic %.4f, impact train %.4f, noise %.4f, Lorenz %.4f\n",
+              b_qp, b_spikes, b_noise, b_lorenz);
+  EXPECT_LT(b_qp, 0.01);
+  EXPECT_LT(b_spikes, 0.05);
+  EXPECT_GT(b_noise, 0.9);
+  EXPECT_GT(b_lorenz, 0.5);
+  EXPECT_TRUE(std::isnan(broadband_share(amplitude_spectrum(std::vector<double>(16, 1.0), dt))));
+}

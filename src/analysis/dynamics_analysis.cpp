@@ -101,12 +101,13 @@ const char* verdict_rule() {
   return "after the transient, with at least 16 Poincaré sections (fewer: undetermined, not "
          "enough periods): periodic (period-k) if the sections hold k <= 8 distinct points and "
          "each recurs (k <= sections/2); otherwise chaotic if the largest Lyapunov exponent gives "
-         "lambda*T > 0.1 per period T, quasi-periodic if lambda*T <= 0.1, undetermined if no "
-         "exponent was computed";
+         "lambda*T > 0.1 per period T, quasi-periodic if lambda*T <= 0.1; without an exponent, "
+         "chaotic if the spectrum's broadband share exceeds 0.5 (continuous), quasi-periodic if it "
+         "is below 0.1 (discrete), else undetermined";
 }
 
 Verdict classify_motion(double lyapunov, double period, int distinct, int sections,
-                        int non_harmonic_peaks, double min_end_time) {
+                        int non_harmonic_peaks, double min_end_time, double broadband) {
   Verdict v;
   std::ostringstream s;
   const bool have_lyap = std::isfinite(lyapunov);
@@ -127,6 +128,16 @@ Verdict classify_motion(double lyapunov, double period, int distinct, int sectio
     v.evidence.push_back(s.str());
     s.str("");
   }
+  const bool have_spectrum = std::isfinite(broadband);
+  const char* spectrum_kind = !have_spectrum                              ? ""
+                              : broadband < kVerdictDiscreteSpectrum      ? "discrete"
+                              : broadband > kVerdictBroadbandSpectrum     ? "continuous"
+                                                                          : "mixed";
+  if (have_spectrum) {
+    s << "broadband share of the spectrum " << broadband << " (" << spectrum_kind << ")";
+    v.evidence.push_back(s.str());
+    s.str("");
+  }
   if (sections < kVerdictMinSections) {
     v.kind = "undetermined";
     s << "not enough periods: " << sections << " section" << (sections == 1 ? "" : "s")
@@ -140,10 +151,21 @@ Verdict classify_motion(double lyapunov, double period, int distinct, int sectio
     v.evidence.push_back("period-" + std::to_string(distinct) + " orbit: every point recurs");
   } else if (std::isfinite(growth)) {
     v.kind = growth > kVerdictChaosThreshold ? "chaotic" : "quasi-periodic";
+    if (have_spectrum && std::string(spectrum_kind) != "mixed") {
+      const bool agrees = (v.kind == "chaotic") == (std::string(spectrum_kind) == "continuous");
+      v.evidence.push_back(std::string("the spectrum ") + (agrees ? "agrees" : "disagrees") +
+                           "; the exponent decides");
+    }
+  } else if (have_spectrum && std::string(spectrum_kind) != "mixed") {
+    v.kind = std::string(spectrum_kind) == "continuous" ? "chaotic" : "quasi-periodic";
+    v.evidence.push_back("no Lyapunov exponent: the spectrum decides");
   } else {
     v.kind = "undetermined";
-    v.evidence.push_back("the points do not recur, and no Lyapunov exponent was computed to tell "
-                         "quasi-periodic from chaotic motion");
+    v.evidence.push_back(have_spectrum
+                             ? "the points do not recur, the spectrum is neither discrete nor "
+                               "continuous, and no Lyapunov exponent was computed"
+                             : "the points do not recur, and no Lyapunov exponent was computed to "
+                               "tell quasi-periodic from chaotic motion");
   }
   return v;
 }

@@ -3,6 +3,7 @@
 /// Nonlinear-dynamics measures: Poincaré point clustering, the largest Lyapunov exponent, contact
 /// mode episodes, and the periodic / quasi-periodic / chaotic verdict.
 #include <Eigen/Core>
+#include <cmath>
 #include <functional>
 #include <string>
 #include <vector>
@@ -73,6 +74,10 @@ constexpr int kVerdictMinSections = 16;
 constexpr int kVerdictMaxPeriod = 8;
 /// λ·T above which neighbouring trajectories separate: chaotic.
 constexpr double kVerdictChaosThreshold = 0.1;
+/// Broadband share of the spectrum (signal.hpp) below which it is discrete (lines only), and
+/// above which it is continuous.
+constexpr double kVerdictDiscreteSpectrum = 0.1;
+constexpr double kVerdictBroadbandSpectrum = 0.5;
 
 /// The rule classify_motion applies, in the words analyze, report and summary.json print.
 const char* verdict_rule();
@@ -80,10 +85,13 @@ const char* verdict_rule();
 /// Classifies the motion after the transient by verdict_rule(): `sections` Poincaré sections
 /// holding `distinct` distinct points, the largest Lyapunov exponent λ (NaN if not computed)
 /// and `period` T (the driver's, or the mean time between sections; λT is the growth per
-/// period); `non_harmonic_peaks` (strong spectral peaks off the driving harmonics, −1: none
+/// period); `broadband` the spectrum's broadband share (NaN: none computed), which decides
+/// between quasi-periodic and chaotic when there is no exponent and is weighed against it when
+/// there is; `non_harmonic_peaks` (strong spectral peaks off the driving harmonics, −1: none
 /// computed) is listed as evidence only. `min_end_time` (s, 0: unknown) is the end_time that
 /// would give enough sections, quoted when there are too few.
 Verdict classify_motion(double lyapunov, double period, int distinct, int sections,
-                        int non_harmonic_peaks, double min_end_time = 0.0);
+                        int non_harmonic_peaks, double min_end_time = 0.0,
+                        double broadband = std::nan(""));
 
 }  // namespace lash

@@ -100,4 +100,29 @@ void decimate_min_max(const std::vector<double>& t, const std::vector<double>& v
   }
 }
 
+double broadband_share(const Spectrum& s) {
+  const std::vector<double>& p = s.psd;
+  const int n = static_cast<int>(p.size());
+  if (n < 32) return std::nan("");
+  double total = 0.0;
+  for (int k = 1; k < n; ++k) total += p[k];
+  if (!(total > 0.0)) return std::nan("");
+  std::vector<char> line(n, 0);
+  std::vector<double> around;
+  for (int k = 1; k + 1 < n; ++k) {
+    if (p[k] < p[k - 1] || p[k] < p[k + 1] || !(p[k] > 0.0)) continue;
+    around.clear();
+    for (int j = k - 16; j <= k + 16; ++j)
+      if (j >= 1 && j < n && std::abs(j - k) >= 4) around.push_back(p[j]);
+    if (around.empty()) continue;
+    std::nth_element(around.begin(), around.begin() + around.size() / 2, around.end());
+    if (p[k] > kLineProminence * around[around.size() / 2])
+      for (int j = std::max(1, k - 3); j <= std::min(n - 1, k + 3); ++j) line[j] = 1;
+  }
+  double in_lines = 0.0;
+  for (int k = 1; k < n; ++k)
+    if (line[k]) in_lines += p[k];
+  return 1.0 - in_lines / total;
+}
+
 }  // namespace lash

@@ -35,6 +35,15 @@ enum class Window { rectangular, hann };
 /// samples or dt ≤ 0.
 Spectrum amplitude_spectrum(const std::vector<double>& x, double dt, Window window = Window::hann);
 
+/// Share of a spectrum's power (its PSD, the mean bin excluded) that lies outside its lines: a
+/// line is a local maximum more than kLineProminence times the median of the bins 4 to 16 bins
+/// away on either side, and owns the bins within 3 of it (the Hann window's main lobe and its
+/// first side lobe). Near 0 for periodic and quasi-periodic signals (all power in lines), near 1
+/// for noise; a chaotic signal's continuous spectrum lies in between or high. NaN for fewer than
+/// 32 bins or no power.
+double broadband_share(const Spectrum& s);
+constexpr double kLineProminence = 10.0;
+
 /// Reduces (t, v) to at most ~2·buckets points keeping each bucket's minimum and maximum in time
 /// order, so spikes survive decimation for display.
 void decimate_min_max(const std::vector<double>& t, const std::vector<double>& v, size_t buckets,

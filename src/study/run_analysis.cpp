@@ -954,10 +954,12 @@ RunAnalysis analyze_samples(const Model& model, const AnalysisOptions& o, Plan& 
 
   // Spectra of the kept channels after the transient.
   int off_harmonic = -1;
+  double broadband = std::nan("");
   for (size_t i = 0; i < sa.fft_index.size(); ++i) {
     if (sa.fft_data[i].size() < 16) continue;
     const Spectrum spec = amplitude_spectrum(sa.fft_data[i], s.output_interval);
     if (i == 0 && p.period > 0) off_harmonic = non_harmonic_peaks(spec, 1.0 / p.period);
+    if (i == 0) broadband = broadband_share(spec);
     ChannelSpectrum cs;
     cs.channel = sa.channels[sa.fft_index[i]].name;
     decimate_min_max(spec.frequency, spec.amplitude, o.spectrum_points, cs.frequency, cs.amplitude);
@@ -1000,7 +1002,8 @@ RunAnalysis analyze_samples(const Model& model, const AnalysisOptions& o, Plan& 
   }
 
   const Verdict v =
-      classify_motion(lyap, verdict_period, distinct, n_sections, off_harmonic, min_end_time);
+      classify_motion(lyap, verdict_period, distinct, n_sections, off_harmonic, min_end_time,
+                      broadband);
   out.verdict.kind = v.kind;
   out.verdict.evidence = v.evidence;
   out.verdict.rule = verdict_rule();
