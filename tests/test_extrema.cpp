@@ -89,6 +89,21 @@ double theta_of_max_acceleration() {
   return 0.5 * (a + b);
 }
 
+/// A 2 kg slider on a frictionless guide, 800 N/m spring, pulled 10 mm: x = 0.1 + 0.01 cos 20t,
+/// vx = −0.2 sin 20t, ax = −4 cos 20t. The output interval is the whole run: only t = 0 and
+/// end_time are output.
+const char* const kSpringYaml = R"Y(
+bodies:
+  block: {mass: 2.0, inertia: 0.01, position: [0.11, 0]}
+ground:
+  markers: {A: [0, 0]}
+joints:
+  guide: {type: translational, guide: ground.A, slider: block, axis: [1, 0]}
+loads:
+  spring: {type: spring_damper, from: ground.A, to: block, stiffness: 800, free_length: 0.1}
+solver: {rtol: 1e-9, atol: 1e-12, end_time: 0.3, output_interval: 0.3, initial_state: given}
+)Y";
+
 }  // namespace
 
 TEST(Extrema, IdealSliderCrankPeaksMatchTheClosedFormBetweenOutputs) {
@@ -150,19 +165,8 @@ TEST(Extrema, RefinementLocatesTurningPointsInsideSteps) {
   // A 2 kg slider on a frictionless guide, 800 N/m spring, pulled 10 mm: x = 0.1 + 0.01 cos 20t,
   // vx = −0.2 sin 20t (min −0.2 at 20t = π/2, max +0.2 at 3π/2), ax = −4 cos 20t (max +4 at
   // 20t = π). The output interval is the whole run: only t = 0 and end_time are output.
-  const std::string yaml = R"Y(
-bodies:
-  block: {mass: 2.0, inertia: 0.01, position: [0.11, 0]}
-ground:
-  markers: {A: [0, 0]}
-joints:
-  guide: {type: translational, guide: ground.A, slider: block, axis: [1, 0]}
-loads:
-  spring: {type: spring_damper, from: ground.A, to: block, stiffness: 800, free_length: 0.1}
-solver: {rtol: 1e-9, atol: 1e-12, end_time: 0.3, output_interval: 0.3, initial_state: given}
-)Y";
   PeakRun r;
-  r.model = load_model_text(yaml, "spring.yaml", {}).model;
+  r.model = load_model_text(kSpringYaml, "spring.yaml", {}).model;
   Workspace ws(r.model);
   r.obs = std::make_unique<PeakObserver>(r.model);
   r.result = simulate(r.model, ws, *r.obs);
@@ -185,19 +189,8 @@ TEST(Extrema, AWindowCountsItsEndsAndRefinesInsideItOnly) {
   // vx = −0.2 sin 20t has its minimum −0.2 inside (t = π/40) and its largest value at the
   // window's end, −0.2 sin 2.4; ax = −4 cos 20t rises through the window: −4 cos 1 at its start,
   // −4 cos 2.4 at its end. No output falls in the window (outputs at 0 and 0.3 s only).
-  const std::string yaml = R"Y(
-bodies:
-  block: {mass: 2.0, inertia: 0.01, position: [0.11, 0]}
-ground:
-  markers: {A: [0, 0]}
-joints:
-  guide: {type: translational, guide: ground.A, slider: block, axis: [1, 0]}
-loads:
-  spring: {type: spring_damper, from: ground.A, to: block, stiffness: 800, free_length: 0.1}
-solver: {rtol: 1e-9, atol: 1e-12, end_time: 0.3, output_interval: 0.3, initial_state: given}
-)Y";
   PeakRun r;
-  r.model = load_model_text(yaml, "spring.yaml", {}).model;
+  r.model = load_model_text(kSpringYaml, "spring.yaml", {}).model;
   Workspace ws(r.model);
   r.obs = std::make_unique<PeakObserver>(r.model);
   r.obs->tracked.set_window(0.05, 0.12);

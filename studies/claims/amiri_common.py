@@ -16,6 +16,19 @@ def columns(joint, accel):
     ]
 
 
+def figures(title, joint, accel):
+    """The with/without study's figures: the link's acceleration and the joint's Poincaré map."""
+    return [
+        {"kind": "series", "file": "acceleration.svg",
+         "title": f"{title}: the link's transverse acceleration, with and without absorbers",
+         "channel": accel, "series": "absorbers", "ylabel": "m/s²"},
+        {"kind": "section_map", "file": "poincare.svg",
+         "title": f"{title}: Poincaré map of the {joint} journal (once per crank revolution)",
+         "x_channel": f"{joint}.ex", "y_channel": f"{joint}.ey", "series": "absorbers",
+         "xlabel": "eccentricity x (m)", "ylabel": "eccentricity y (m)"},
+    ]
+
+
 def _word(held, n):
     if n == 0:
         return "unknown"

@@ -7,15 +7,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import amiri_common  # noqa: E402
 
 COLUMNS = amiri_common.columns("coupler_rocker", "coupler_accel.a")
-FIGURES = [
-    {"kind": "series", "file": "acceleration.svg",
-     "title": "four-bar: the link's transverse acceleration, with and without absorbers",
-     "channel": "coupler_accel.a", "series": "absorbers", "ylabel": "m/s²"},
-    {"kind": "section_map", "file": "poincare.svg",
-     "title": "four-bar: Poincaré map of the coupler_rocker journal (once per crank revolution)",
-     "x_channel": "coupler_rocker.ex", "y_channel": "coupler_rocker.ey", "series": "absorbers",
-     "xlabel": "eccentricity x (m)", "ylabel": "eccentricity y (m)"},
-]
+FIGURES = amiri_common.figures("four-bar", "coupler_rocker", "coupler_accel.a")
 
 
 def claims(runs):

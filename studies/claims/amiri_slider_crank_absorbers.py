@@ -7,15 +7,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import amiri_common  # noqa: E402
 
 COLUMNS = amiri_common.columns("rod_slider", "rod_accel.a")
-FIGURES = [
-    {"kind": "series", "file": "acceleration.svg",
-     "title": "slider-crank: the link's transverse acceleration, with and without absorbers",
-     "channel": "rod_accel.a", "series": "absorbers", "ylabel": "m/s²"},
-    {"kind": "section_map", "file": "poincare.svg",
-     "title": "slider-crank: Poincaré map of the rod_slider journal (once per crank revolution)",
-     "x_channel": "rod_slider.ex", "y_channel": "rod_slider.ey", "series": "absorbers",
-     "xlabel": "eccentricity x (m)", "ylabel": "eccentricity y (m)"},
-]
+FIGURES = amiri_common.figures("slider-crank", "rod_slider", "rod_accel.a")
 
 
 def claims(runs):
