@@ -126,10 +126,19 @@ TEST(Cli, ModesPrintsAFlexibleLinksFrequenciesBesideTheClosedForms) {
   row >> index >> kind >> mesh >> closed;
   EXPECT_NEAR(closed, 1154.88, 0.01);
   EXPECT_NEAR(mesh / closed, 1.0, 1e-4);
-  // A model without flexible links says so.
+  // A model without flexible links says so; the mechanism's own modes follow (the Flores
+  // slider-crank's crank driver holds its one degree of freedom).
   const Result none = run_lash("modes " + example());
   EXPECT_EQ(none.code, 0);
   EXPECT_NE(none.out.find("no flexible links"), std::string::npos);
+  EXPECT_NE(none.out.find("the mechanism, linearised at its initial configuration"),
+            std::string::npos) << none.out;
+  EXPECT_NE(none.out.find("0 degrees of freedom"), std::string::npos) << none.out;
+  // The tuned-mass absorber example: its two absorbers' modes, damped.
+  const Result tmd = run_lash("modes " + lash::test::example_path("tmd_slider_crank.yaml"));
+  EXPECT_EQ(tmd.code, 0) << tmd.out;
+  EXPECT_NE(tmd.out.find("2 degrees of freedom"), std::string::npos) << tmd.out;
+  EXPECT_NE(tmd.out.find("damping ratio"), std::string::npos) << tmd.out;
 }
 
 TEST(Cli, CheckListsProblemsWithFileLineColumnAndExitsTwo) {

@@ -228,10 +228,11 @@ int main(int argc, char** argv) {
 
   auto* modes = app.add_subcommand(
       "modes", "Natural frequencies of each flexible link of a model, from its mesh, beside the "
-               "Euler–Bernoulli closed forms (clamped–free and free–free)");
+               "Euler–Bernoulli closed forms (clamped–free and free–free), and of the whole "
+               "mechanism linearised at its initial configuration");
   int mode_count = 6;
   modes->add_option("model", model_path, "Model file (YAML)")->required()->check(CLI::ExistingFile);
-  modes->add_option("--count", mode_count, "Elastic modes per support (default 6)")
+  modes->add_option("--count", mode_count, "Modes per table (default 6)")
       ->check(CLI::Range(1, 100));
   modes->add_option("--set", overrides, "Override a model value, KEY.PATH=VALUE, repeatable")
       ->take_all();

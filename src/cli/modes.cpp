@@ -1,11 +1,14 @@
 // `lash modes MODEL`: the natural frequencies of each flexible link of a model, from its mesh,
 // beside the Euler–Bernoulli closed forms for the same supports, so that a user can see that the
-// mesh resolves the modes that matter before running.
+// mesh resolves the modes that matter before running; then those of the whole mechanism,
+// linearised at its initial configuration (study/linear_modes.hpp).
 #include "cli/modes.hpp"
 
 #include <array>
 #include <cmath>
 #include <iomanip>
+
+#include "study/linear_modes.hpp"
 
 namespace lash::cli {
 namespace {
@@ -72,6 +75,25 @@ int print_modes(const Model& model, int count, std::ostream& out) {
            "bodies they hold shift them)\n";
   }
   if (links == 0) out << "no flexible links in this model (give a body a 'flexible:' map)\n";
+  const LinearModes lm = linear_modes(model);
+  out << "the mechanism, linearised at its initial configuration (clearance joints ideal, drivers "
+         "holding their coordinates, at rest): " << lm.dof << " degree" << (lm.dof == 1 ? "" : "s")
+      << " of freedom\n";
+  if (!lm.modes.empty()) out << "    mode    f (Hz)        damping ratio\n";
+  int shown = 0;
+  for (const LinearMode& md : lm.modes) {
+    if (shown >= count) break;
+    out << "    " << std::setw(4) << ++shown << "  " << std::setw(12) << std::setprecision(6)
+        << md.frequency << "  " << std::setw(12) << std::setprecision(3) << md.damping_ratio << "\n";
+  }
+  if (lm.modes.size() > static_cast<size_t>(count))
+    out << "    (" << lm.modes.size() - count << " more; --count N shows more)\n";
+  if (!lm.real_rates.empty()) {
+    out << "  " << lm.real_rates.size() << " real eigenvalue" << (lm.real_rates.size() == 1 ? "" : "s")
+        << " (1/s: a free or overdamped direction near 0, an unstable one > 0):";
+    for (double r : lm.real_rates) out << " " << std::setprecision(4) << r;
+    out << "\n";
+  }
   return links;
 }
 

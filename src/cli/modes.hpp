@@ -8,8 +8,10 @@
 
 namespace lash::cli {
 
-/// Prints the first `count` elastic modes of every flexible link of `model` for each support.
-/// Returns the number of flexible links.
+/// Prints the first `count` elastic modes of every flexible link of `model` for each support,
+/// then the first `count` modes of the mechanism linearised at its initial configuration.
+/// Returns the number of flexible links. Throws std::runtime_error when the mechanism cannot be
+/// assembled or linearised.
 int print_modes(const Model& model, int count, std::ostream& out);
 
 }  // namespace lash::cli

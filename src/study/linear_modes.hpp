@@ -1,0 +1,36 @@
+#pragma once
+/// @file linear_modes.hpp
+/// Natural frequencies of a mechanism linearised at its initial configuration (clearance joints
+/// ideal, drivers holding their coordinates, at rest): the eigenvalues of the right-hand side's
+/// Jacobian restricted to the tangent space of the constraints (docs/analysis.md, "Linearised
+/// mechanism").
+#include <complex>
+#include <string>
+#include <vector>
+
+#include "core/model.hpp"
+
+namespace lash {
+
+struct LinearMode {
+  double frequency = 0.0;      ///< undamped natural frequency |λ|/2π, Hz
+  double damping_ratio = 0.0;  ///< ζ = −Re λ / |λ|
+  std::complex<double> eigenvalue;  ///< λ, 1/s (the one with Im λ ≥ 0 of a pair)
+};
+
+struct LinearModes {
+  int dof = 0;                    ///< degrees of freedom (nq − rank Φ_q)
+  std::vector<LinearMode> modes;  ///< ascending frequency; one per pair of eigenvalues
+  std::vector<double> real_rates; ///< real eigenvalues (1/s): overdamped, static or unstable directions
+};
+
+/// The mechanism's modes: `model` with every clearance joint made ideal and every driver holding
+/// its coordinate at its initial value, assembled (initial_state) and at rest. The Jacobian of
+/// the right-hand side (central differences) on a basis (n, 0), (0, n) of the tangent space
+/// (n spanning the null space of Φ_q) is exact there: with q̇ = 0 the linearised accelerations of
+/// tangent motions satisfy Φ_q δq̈ = 0. Gravity, springs, the links' elasticity and the
+/// constraints' curvature (a pendulum's restoring force) all enter. Throws std::runtime_error
+/// when the model cannot be assembled or evaluated.
+LinearModes linear_modes(const Model& model);
+
+}  // namespace lash

@@ -1,0 +1,84 @@
+// The mechanism linearised at its initial configuration (study/linear_modes.hpp) against closed
+// forms and the flexible link's own finite-element modes.
+#include <cmath>
+
+#include "core/beam.hpp"
+#include "study/linear_modes.hpp"
+#include "test_support.hpp"
+
+namespace lash::test {
+namespace {
+
+TEST(LinearModes, APendulumHangingFromItsPinSwingsAtItsClosedForm) {
+  // A 1 m bar of 0.54 kg (I = 0.045 kg·m² about its centre) hanging from a pin at one end:
+  // ω² = m g (L/2) / (I + m (L/2)²); one degree of freedom, one undamped mode.
+  const Model m = load_model_text(R"Y(
+gravity: [0, -9.81]
+ground: {markers: {O: [0, 0]}}
+bodies:
+  bar: {mass: 0.54, inertia: 0.045, position: [0, -0.5], angle_deg: -90, markers: {A: [-0.5, 0]}}
+joints:
+  pin: {type: revolute, journal: bar.A, bearing: ground.O}
+solver: {end_time: 1}
+)Y", "pendulum.yaml").model;
+  const LinearModes lm = linear_modes(m);
+  ASSERT_EQ(lm.dof, 1);
+  ASSERT_EQ(lm.modes.size(), 1u);
+  const double omega = std::sqrt(0.54 * 9.81 * 0.5 / (0.045 + 0.54 * 0.25));
+  EXPECT_NEAR(lm.modes[0].frequency, omega / (2 * M_PI), 1e-6 * omega);
+  EXPECT_NEAR(lm.modes[0].damping_ratio, 0.0, 1e-6);
+}
+
+TEST(LinearModes, ASpringDamperOnAGuideHasItsFrequencyAndDampingRatio) {
+  // 2 kg on a guide, k = 800 N/m, c = 8 N·s/m: ω_n = 20 rad/s, ζ = c / (2√(km)) = 0.1.
+  const Model m = load_model_text(R"Y(
+ground: {markers: {A: [0, 0]}}
+bodies:
+  block: {mass: 2.0, inertia: 0.01, position: [0.1, 0]}
+joints:
+  guide: {type: translational, guide: ground.A, slider: block, axis: [1, 0]}
+loads:
+  spring: {type: spring_damper, from: ground.A, to: block, stiffness: 800, damping: 8}
+solver: {end_time: 1}
+)Y", "spring.yaml").model;
+  const LinearModes lm = linear_modes(m);
+  ASSERT_EQ(lm.dof, 1);
+  ASSERT_EQ(lm.modes.size(), 1u);
+  EXPECT_NEAR(lm.modes[0].frequency, 20.0 / (2 * M_PI), 1e-6);
+  EXPECT_NEAR(lm.modes[0].damping_ratio, 0.1, 1e-6);
+}
+
+TEST(LinearModes, AClampedLinkInTheMechanismHasItsOwnCantileverModes) {
+  // examples/spin_up_beam.yaml at rest: the beam clamped to a hub that the driver holds is a
+  // cantilever; the mechanism's modes are the mesh's clamped–free ones (beam::modes), computed
+  // independently, and the first two are within 1 % of Euler–Bernoulli's 1.8751² and 4.6941²
+  // × √(EI/ρAL⁴).
+  const Model m = load_model_file(example_path("spin_up_beam.yaml")).model;
+  const LinearModes lm = linear_modes(m);
+  const Body* beam = nullptr;
+  for (const Body& b : m.bodies)
+    if (b.flexible()) beam = &b;
+  ASSERT_NE(beam, nullptr);
+  const std::vector<beam::Mode> own = beam::modes(beam->mesh, beam::Support::clamped);
+  ASSERT_EQ(lm.dof, static_cast<int>(own.size()));
+  ASSERT_EQ(lm.modes.size(), own.size());
+  for (size_t k = 0; k < own.size(); ++k)
+    EXPECT_NEAR(lm.modes[k].frequency, own[k].omega / (2 * M_PI), 1e-5 * lm.modes[k].frequency)
+        << "mode " << k + 1;
+  const beam::Section& s = beam->mesh.section;
+  const double scale = std::sqrt(s.youngs_modulus * s.inertia /
+                                 (s.density * s.area * std::pow(beam->mesh.length, 4))) / (2 * M_PI);
+  EXPECT_NEAR(lm.modes[0].frequency, 1.87510407 * 1.87510407 * scale, 0.01 * 3.516 * scale);
+  EXPECT_NEAR(lm.modes[1].frequency, 4.69409113 * 4.69409113 * scale, 0.01 * 22.03 * scale);
+}
+
+TEST(LinearModes, ADrivenMechanismHeldByItsDriversHasNoFreedom) {
+  // The Flores slider-crank: one degree of freedom once its clearance joint is ideal, which the
+  // crank driver holds.
+  const LinearModes lm = linear_modes(load_model_file(example_path("flores_slider_crank.yaml")).model);
+  EXPECT_EQ(lm.dof, 0);
+  EXPECT_TRUE(lm.modes.empty());
+}
+
+}  // namespace
+}  // namespace lash::test
