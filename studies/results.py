@@ -226,8 +226,14 @@ def figure(spec, runs, folder):
                 g = groups.setdefault(level(r, spec.get("series")), ([], []))
                 g[0].append(float(r["params"][spec["x"]]))
                 g[1].append(value)
+        # Several series at the same levels (up and down): each shifted by a fraction of the
+        # levels' spacing, so that neither hides the other.
+        levels = sorted({x for xs, _ in groups.values() for x in xs})
+        gaps = [b - a for a, b in zip(levels, levels[1:]) if b > a]
+        dodge = 0.25 * min(gaps) / max(1, len(groups) - 1) if gaps and len(groups) > 1 else 0.0
         return xy_chart_svg(spec["title"], spec["x"], spec["ylabel"],
-                            [(k, xs, ys, "dots") for k, (xs, ys) in groups.items()])
+                            [(k, [x + (i - (len(groups) - 1) / 2) * dodge for x in xs], ys, "dots")
+                             for i, (k, (xs, ys)) in enumerate(groups.items())])
     if kind == "section_map":
         points = {}
         for run, k, channel, value in read_table(
