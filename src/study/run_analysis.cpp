@@ -294,16 +294,18 @@ class Collector : public Observer {
   }
   bool feed_outputs = true;         ///< outputs and events to the SampleAnalysis
   bool feed_sections = true;        ///< sections to the SampleAnalysis
-  bool stop_at_lyapunov_start = false;  ///< stop the run once the start state is kept
   const Driver* angle_driver = nullptr;
   /// Exact extrema over the statistics window (null: the statistics keep the samples' extrema).
   ChannelExtrema* extrema = nullptr;
-  /// Stop the run at the first output past this time (the end of what is needed).
-  double stop_after = std::numeric_limits<double>::infinity();
+  /// A run made again for what a folder lacks stops once it has it: the Lyapunov start state
+  /// (when `need_lyapunov_start`) and every output up to `need_until`.
+  bool stop_when_done = false;
+  bool need_lyapunov_start = false;
+  double need_until = -std::numeric_limits<double>::infinity();
 
   std::string stop_reason() const override {
-    if (stop_at_lyapunov_start && have_lyapunov_start) return "the start state is kept";
-    if (t_output_ > stop_after) return "what is needed is simulated";
+    if (stop_when_done && (!need_lyapunov_start || have_lyapunov_start) && t_output_ > need_until)
+      return "what is needed is simulated";
     return extra_ ? extra_->stop_reason() : std::string();
   }
   void output(double t, const Eigen::VectorXd& y, const Workspace& ws) override {
@@ -764,13 +766,11 @@ std::map<std::string, ChannelExtremum> extrema_by_name(const Model& model, const
   return out;
 }
 
-/// Exact extrema over the statistics window, tracked by the run that feeds the rows; none over a
-/// crank-angle range (they hold for times, not angles).
-std::optional<ChannelExtrema> window_extrema(const Model& model, const AnalysisOptions& o) {
-  if (!std::isnan(o.stats_angle0)) return std::nullopt;
-  std::optional<ChannelExtrema> ext(std::in_place, model);
+/// Starts `ext` tracking the exact extrema over the statistics window (a run feeds it).
+void track_window_extrema(std::optional<ChannelExtrema>& ext, const Model& model,
+                          const AnalysisOptions& o) {
+  ext.emplace(model);
   ext->set_window(o.stats_t0, o.stats_t1);
-  return ext;
 }
 
 /// The analyses of the gathered rows: series, twin comparison, frames, statistics, contact
@@ -1066,8 +1066,9 @@ RunAnalysis analyze_run(const Model& model, const AnalysisOptions& o, Observer* 
   sa.angle1 = o.stats_angle1;
   Collector col(model, ws, sa, extra);
   col.angle_driver = p.drv;
-  std::optional<ChannelExtrema> ext = window_extrema(model, o);
-  if (ext) col.extrema = &*ext;
+  // Exact extrema over the window; none over a crank-angle range (they hold for times, not angles).
+  std::optional<ChannelExtrema> ext;
+  if (std::isnan(o.stats_angle0)) track_window_extrema(ext, model, o), col.extrema = &*ext;
   RunOptions run_options;
   run_options.interrupt = o.interrupt;
   run_options.from = o.from;
@@ -1199,8 +1200,7 @@ RunAnalysis analyze_recorded_run(const Model& model, const AnalysisOptions& o, R
     exact = run.extrema;
     prov.read.push_back("exact extrema (min, max, peak, tracked between outputs): summary.json");
   } else {
-    ext.emplace(model);
-    ext->set_window(o.stats_t0, o.stats_t1);
+    track_window_extrema(ext, model, o);
   }
 
   // What the files do not hold: sections on a plane (or of channels not written), the state
@@ -1219,8 +1219,9 @@ RunAnalysis analyze_recorded_run(const Model& model, const AnalysisOptions& o, R
     Collector col(model, ws, sa, nullptr);
     col.feed_outputs = false;
     col.feed_sections = need_sections;
-    col.stop_at_lyapunov_start = !need_sections && !ext;
-    if (ext) col.extrema = &*ext, col.stop_after = need_sections ? s.end_time : o.stats_t1;
+    col.stop_when_done = !need_sections;  // sections: to the end
+    col.need_lyapunov_start = want_lyapunov;
+    if (ext) col.extrema = &*ext, col.need_until = o.stats_t1;
     RunOptions ro;
     ro.interrupt = o.interrupt;
     const RunResult again = simulate(model, ws, col,
@@ -1232,9 +1233,9 @@ RunAnalysis analyze_recorded_run(const Model& model, const AnalysisOptions& o, R
                       : !row_point.complete() ? "stroboscopic sections (their channels were not written)"
                                               : "stroboscopic sections" + strobe_note) +
           ": the main run made again to t = " + fmt_g(again.status.t) + " s");
-    else if (want_lyapunov && !ext)
-      prov.resimulated.push_back("Lyapunov start state (not written): the main run made again to "
-                                 "its first section after the transient, t = " +
+    else if (want_lyapunov)
+      prov.resimulated.push_back("Lyapunov start state (not written): the main run made again "
+                                 "past its first section after the transient, t = " +
                                  fmt_g(col.lyapunov_t0) + " s");
     if (ext) {
       exact = extrema_by_name(model, *ext);

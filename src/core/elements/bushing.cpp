@@ -2,13 +2,12 @@
 // and point b, plus an optional torsional part (the tuned-mass absorber's suspension).
 //   d = r_b − r_a,  d_i = u_i·d,  ḋ_i = u_i·ḋ + ω_f perp(u_i)·d   (the exact rate of d_i),
 //   F = Σ (k_i d_i + c_i ḋ_i) u_i pulls a toward b (−F on b), T = k_t θ + c_t θ̇ (θ = φ_b − φ_a).
-// V = Σ ½ k_i d_i² + ½ k_t θ². Because u_i turns with the frame body, F acts on the frame body
-// at the other body's point: then the generalised force is exactly −∂V/∂q (the moment of F
-// about the frame includes the turning of u_i), and the dissipated power is Σ c_i ḋ_i² + c_t θ̇².
-// A flexible link as the frame: its axes are those of its axis at its own point (kinematics.hpp:
-// point_angle), F acts at the two points, and the turning of u_i is the torque
-// −Σ (k_i d_i + c_i ḋ_i) perp(u_i)·d on the link's axis there (∂d_i/∂θ = perp(u_i)·d). On a link
-// the torsional part's angles are its axis' at the point, θ within (−π, π].
+// V = Σ ½ k_i d_i² + ½ k_t θ². F acts at the two points and, because u_i turns with the frame
+// body, the frame takes the torque −Σ (k_i d_i + c_i ḋ_i) perp(u_i)·d = d × F at its point
+// (∂d_i/∂θ = perp(u_i)·d): the generalised force is then exactly −∂V/∂q, and the dissipated power
+// is Σ c_i ḋ_i² + c_t θ̇². A flexible link as the frame: its axes are those of its axis at its own
+// point (kinematics.hpp: point_angle), and the torque acts on that axis. On a link the torsional
+// part's angles are its axis' at the point, θ within (−π, π].
 #include "core/elements/registry.hpp"
 
 namespace lash::bushing {
@@ -19,11 +18,10 @@ void apply(const Model&, Workspace& ws, const Load& l, int index) {
   const BodyKin& kf = ws.kin_of(l.frame_body);
   const PointKin pa = point_kin(ka, l.a.s), pb = point_kin(kb, l.b.s);
   const Vec2 d = pb.r - pa.r, d_dot = pb.v - pa.v;
-  // The frame's axes: a rigid body's, or a link's axis at its own point.
-  const bool frame_link = kf.mesh != nullptr;
-  const PointKin& pf = l.frame_body == l.a.body ? pa : pb;
-  const Eigen::Matrix2d axes = frame_link ? rotation(point_angle(kf, pf)) : kf.A;
-  const double omega_f = frame_link ? pf.omega : kf.omega;
+  // The frame's axes: the ground's, a rigid body's, or a link's axis at its own point.
+  const PointKin* pf = l.frame_body == kGround ? nullptr : l.frame_body == l.a.body ? &pa : &pb;
+  const Eigen::Matrix2d axes = kf.mesh ? rotation(point_angle(kf, *pf)) : kf.A;
+  const double omega_f = pf ? pf->omega : 0.0;
   Vec2 f = Vec2::Zero(), defl;
   double dissipated = 0.0, potential = 0.0, turning = 0.0;
   for (int i = 0; i < 2; ++i) {
@@ -39,17 +37,8 @@ void apply(const Model&, Workspace& ws, const Load& l, int index) {
   LoadOutput& out = ws.load_out[index];
   out.force = -f;
   out.deflection = defl;
-  if (frame_link) {
-    out.power = apply_force(ws.g, pa, f) + apply_force(ws.g, pb, -f) +
-                apply_point_torque(ws.g, pf, turning);
-  } else {
-    // Application points: the frame body takes its force at the other body's point.
-    const bool frame_a = l.frame_body == l.a.body && l.a.body != kGround;
-    const bool frame_b = !frame_a && l.frame_body == l.b.body && l.b.body != kGround;
-    const PointKin qa = frame_a ? point_kin(ka, ka.A.transpose() * (pb.r - ka.r)) : pa;
-    const PointKin qb = frame_b ? point_kin(kb, kb.A.transpose() * (pa.r - kb.r)) : pb;
-    out.power = apply_force(ws.g, qa, f) + apply_force(ws.g, qb, -f);
-  }
+  out.power = apply_force(ws.g, pa, f) + apply_force(ws.g, pb, -f) +
+              (pf ? apply_point_torque(ws.g, *pf, turning) : 0.0);
   // Torsional part.
   double theta = point_angle(kb, pb) - point_angle(ka, pa) - l.angle0;
   if (pa.beam || pb.beam) theta = std::remainder(theta, 2.0 * M_PI);

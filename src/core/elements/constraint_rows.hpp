@@ -21,27 +21,17 @@ inline void revolute_rows(const Workspace& ws, const PointRef& a, const PointRef
   if (out.gamma) out.gamma->segment<2>(row) = pb.a_vel - pa.a_vel;
 }
 
-/// Φ = φ_b − φ_a − angle0 − f (1 row). Rigid bodies and the ground only (finalize).
-inline void angle_row(const Workspace& ws, int body_a, int body_b, double angle0, double f, double fd,
-               double fdd, int row, ConstraintOut& out) {
-  const BodyKin &ka = ws.kin_of(body_a), &kb = ws.kin_of(body_b);
-  out.phi[row] = kb.phi - ka.phi - angle0 - f;
-  put_row(out.phi_q, row, ka, 0, 0, -1);
-  put_row(out.phi_q, row, kb, 0, 0, 1);
-  if (out.phi_dot) (*out.phi_dot)[row] = kb.omega - ka.omega - fd;
-  if (out.gamma) (*out.gamma)[row] = fdd;
-}
-
-/// Φ = θ_b − θ_a − f within (−π, π] (1 row), θ the angle of the material at points a and b
-/// (kinematics.hpp: point_angle): a rigid body's φ, or on a flexible link the direction of its
+/// Φ = θ_b − θ_a − f (1 row), θ the angle of the material at points a and b (kinematics.hpp:
+/// point_angle): a rigid body's φ (the ground's 0), or on a flexible link the direction of its
 /// axis there, θ = atan2(r'_y, r'_x) with ∂θ/∂e = perp(r')ᵀS'/|r'|², θ̇ = r' × ṙ'/|r'|² and the
-/// velocity part of θ̈ −2θ̇ (r'·ṙ')/|r'|². Taken within (−π, π] so that a link's wrapped angle
-/// and a rigid body's unwrapped one compare; continuous where the constraint holds.
-inline void point_angle_row(const Workspace& ws, const PointRef& a, const PointRef& b, double f,
-                            double fd, double fdd, int row, ConstraintOut& out) {
+/// velocity part of θ̈ −2θ̇ (r'·ṙ')/|r'|². With a link, Φ is taken within (−π, π] so that its
+/// wrapped angle and a rigid body's unwrapped one compare (continuous where the row holds).
+inline void angle_row(const Workspace& ws, const PointRef& a, const PointRef& b, double f,
+                      double fd, double fdd, int row, ConstraintOut& out) {
   const BodyKin &ka = ws.kin_of(a.body), &kb = ws.kin_of(b.body);
   const PointKin pa = point_kin(ka, a.s), pb = point_kin(kb, b.s);
-  out.phi[row] = std::remainder(point_angle(kb, pb) - point_angle(ka, pa) - f, 2.0 * M_PI);
+  out.phi[row] = point_angle(kb, pb) - point_angle(ka, pa) - f;
+  if (pa.beam || pb.beam) out.phi[row] = std::remainder(out.phi[row], 2.0 * M_PI);
   auto side = [&](const BodyKin& k, const PointKin& p, double sign) {
     if (!p.beam) {
       put_row(out.phi_q, row, k, 0, 0, sign);

@@ -1,7 +1,7 @@
 // Drivers: prescribed motion of one coordinate, coordinate(t) = initial + f(t), as one
 // constraint row whose multiplier is the driving torque or force.
 // - joint target: revolute θ = φ_a − φ_b (the angle row with a and b swapped; on a flexible link
-//   the angle of its axis at the joint, point_angle_row) or translational
+//   the angle of its axis at the joint) or translational
 //   s = (r_b − r_a)·(A_a axis) (the dot row along the axis);
 // - body target: x, y or φ of a body relative to the ground (Φ = q_i − initial − f), so the
 //   body's own joints may have clearance.
@@ -62,10 +62,8 @@ void driver_constrain(const Model& model, const Workspace& ws, int d, double t, 
     return;
   }
   const Joint& j = model.joints[drv.joint];
-  if (j.type == JointType::revolute && (ws.kin_of(j.a.body).mesh || ws.kin_of(j.b.body).mesh))
-    point_angle_row(ws, j.b, j.a, f, fd, fdd, row, out);  // a link's axis at the joint
-  else if (j.type == JointType::revolute)
-    angle_row(ws, j.b.body, j.a.body, 0.0, f, fd, fdd, row, out);
+  if (j.type == JointType::revolute)
+    angle_row(ws, j.b, j.a, f, fd, fdd, row, out);  // on a link: its axis at the joint
   else
     dot_row(ws, j.a, j.b, j.axis, f, fd, fdd, row, out);
 }

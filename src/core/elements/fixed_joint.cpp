@@ -13,7 +13,7 @@ void constrain(const Model&, const Workspace& ws, const Joint& j, int row, Const
   if (ws.kin_of(j.a.body).mesh || ws.kin_of(j.b.body).mesh)
     slope_row(ws, j.a, j.b, j.angle0, row + 2, out);
   else
-    angle_row(ws, j.a.body, j.b.body, j.angle0, 0, 0, 0, row + 2, out);
+    angle_row(ws, j.a, j.b, j.angle0, 0, 0, row + 2, out);
 }
 
 void channels(const Model&, const Workspace& ws, const Joint&, int row, ChannelSink& s) {

@@ -13,10 +13,7 @@ bool locks_angle(const Model& m, const Joint& j) {
 int rows(const Model& m, const Joint& j) { return locks_angle(m, j) ? 2 : 1; }
 
 void constrain(const Model& m, const Workspace& ws, const Joint& j, int row, ConstraintOut& out) {
-  if (locks_angle(m, j) && ws.kin_of(j.b.body).mesh)
-    point_angle_row(ws, j.a, j.b, j.angle0, 0, 0, row++, out);
-  else if (locks_angle(m, j))
-    angle_row(ws, j.a.body, j.b.body, j.angle0, 0, 0, 0, row++, out);
+  if (locks_angle(m, j)) angle_row(ws, j.a, j.b, j.angle0, 0, 0, row++, out);
   dot_row(ws, j.a, j.b, perp(j.axis), 0, 0, 0, row, out);
 }
 
