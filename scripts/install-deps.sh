@@ -3,7 +3,7 @@
 # Why each one is there: see README.md, "Dependencies".
 set -euo pipefail
 pkgs=(cmake ninja-build g++ make pkg-config
-      libeigen3-dev libyaml-cpp-dev libcli11-dev libfmt-dev libmuparser-dev libginac-dev
+      libeigen3-dev libboost-dev libyaml-cpp-dev libcli11-dev libfmt-dev libmuparser-dev libginac-dev
       libsundials-dev nlohmann-json3-dev libgtest-dev libgmock-dev libbenchmark-dev libfftw3-dev
       python3-matplotlib python3-numpy
       libsqlite3-dev libopenmpi-dev openmpi-bin libhdf5-dev python3-h5py

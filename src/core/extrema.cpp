@@ -2,15 +2,15 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+
+#include <boost/math/tools/minima.hpp>
 
 #include "core/elements/registry.hpp"
 
 namespace lash {
 
 namespace {
-
-/// 1/φ, the golden-section ratio.
-constexpr double kInvPhi = 0.6180339887498949;
 
 /// Largest value of the cubic Hermite interpolant through (0, v0, slope h·d0), (1, v1, h·d1),
 /// sampled at 33 points: an estimate of a turning point's height inside a step.
@@ -91,7 +91,8 @@ void ChannelExtrema::step(double t0, double t1, const Eigen::VectorXd& y1, const
       const double bulge = est - std::max(sign * v0_[i], sign * v1_[i]);
       const double best = sign > 0 ? ext_[i].max : -ext_[i].min;
       if (est + bulge >= best)
-        refine(probe, static_cast<int>(i), sign, std::max(t0, from_), std::min(t1, to_));
+        refine(probe, static_cast<int>(i), sign, std::max(t0, from_), std::min(t1, to_),
+               t1 <= to_ ? -sign * v1_[i] : std::numeric_limits<double>::quiet_NaN());
     }
   }
   std::swap(v0_, v1_);
@@ -100,27 +101,24 @@ void ChannelExtrema::step(double t0, double t1, const Eigen::VectorXd& y1, const
   have_slope_ = true;
 }
 
-void ChannelExtrema::refine(StepProbe& probe, int i, double sign, double a, double b) {
+void ChannelExtrema::refine(StepProbe& probe, int i, double sign, double a, double b, double fb) {
   ++refinements_;
-  // Golden-section search for the largest sign·v on [a, b]; every point updates all channels.
-  double c = b - kInvPhi * (b - a), d = a + kInvPhi * (b - a);
-  if (!probe_values(probe, c, tmp_)) return;
-  double fc = sign * tmp_[i];
-  if (!probe_values(probe, d, tmp_)) return;
-  double fd = sign * tmp_[i];
-  for (int it = 2; it < kRefineIterations; ++it) {
-    if (fc >= fd) {
-      b = d, d = c, fd = fc;
-      c = b - kInvPhi * (b - a);
-      if (!probe_values(probe, c, tmp_)) return;
-      fc = sign * tmp_[i];
-    } else {
-      a = c, c = d, fc = fd;
-      d = a + kInvPhi * (b - a);
-      if (!probe_values(probe, d, tmp_)) return;
-      fd = sign * tmp_[i];
+  // Brent's method (Boost.Math) for the largest sign·v on [a, b], in the step's fraction
+  // s ∈ [0, 1]: it starts at b, whose value is known (fb, NaN if not), then golden-section or
+  // parabolic steps. Every point evaluated updates all channels; the minimiser's own answer is
+  // not needed.
+  bool ok = true;
+  const double h = b - a;
+  auto f = [&](double s) {
+    if (s == 1.0 && !std::isnan(fb)) return fb;
+    if (!ok || !probe_values(probe, a + s * h, tmp_)) {
+      ok = false;  // the dense output is not finite there: stop evaluating
+      return 0.0;
     }
-  }
+    return -sign * tmp_[i];
+  };
+  std::uintmax_t iterations = kRefineIterations;
+  boost::math::tools::brent_find_minima(f, 0.0, 1.0, kRefineBits, iterations);
 }
 
 }  // namespace lash

@@ -23,17 +23,21 @@ struct ChannelExtremum {
 /// At the end of each accepted step [t0, t1] the channels are evaluated at t1 and at
 /// t1 − ε·h (ε = kSlopeFraction), giving each channel's value and left slope there; the slope at
 /// t0 is the previous step's (or, after an event, a forward difference at t0). A channel whose
-/// slope changes sign over the step has a turning point inside it, which a golden-section
-/// search on the dense output locates (kRefineIterations evaluations, the bracket shrinking to
-/// 0.618^kRefineIterations of the step), unless a cubic Hermite estimate through the end values
-/// and slopes shows it cannot beat the extremum already found. Every workspace evaluated,
+/// slope changes sign over the step has a turning point inside it, which Brent's method
+/// (golden-section and parabolic steps, Boost.Math's brent_find_minima) on the dense output
+/// locates (kRefineBits, at most kRefineIterations evaluations), unless a cubic Hermite estimate
+/// through the end values and slopes shows it cannot beat the extremum already found. Every workspace evaluated,
 /// refinement points included, updates every channel.
 class ChannelExtrema {
  public:
   /// Relative offset of the slope sample at a step's end (fraction of the step).
   static constexpr double kSlopeFraction = 1e-3;
-  /// Golden-section iterations per turning point.
+  /// Most evaluations of one turning point's search.
   static constexpr int kRefineIterations = 18;
+  /// Precision of a turning point's time, as Boost's brent_find_minima takes it (tolerance
+  /// τ = 2^(1 − bits) relative): the search stops once its bracket is narrower than
+  /// 4τ(s + 1/4) ≤ 2.5e-3 of the step (s ∈ [0, 1], the best point's place in the step).
+  static constexpr int kRefineBits = 12;
 
   explicit ChannelExtrema(const Model& model);
 
@@ -53,14 +57,15 @@ class ChannelExtrema {
   void restart() { have_slope_ = false; }
 
   const std::vector<ChannelExtremum>& extrema() const { return ext_; }
-  long refinements() const { return refinements_; }      ///< golden-section searches run
+  long refinements() const { return refinements_; }      ///< turning-point searches run
   long evaluations() const { return evaluations_; }      ///< workspace evaluations made
 
  private:
   /// Evaluates all channels at t on the dense output into `out`; false if not finite.
   bool probe_values(StepProbe& probe, double t, std::vector<double>& out);
-  /// Golden-section search for channel i's extremum (sign +1: max, −1: min) in [a, b].
-  void refine(StepProbe& probe, int i, double sign, double a, double b);
+  /// Brent's search for channel i's extremum (sign +1: max, −1: min) in [a, b]; fb is
+  /// −sign·(value at b) if known, else NaN.
+  void refine(StepProbe& probe, int i, double sign, double a, double b, double fb);
 
   const Model& model_;
   std::vector<ChannelExtremum> ext_;

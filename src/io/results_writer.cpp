@@ -186,7 +186,7 @@ RunStatus ResultsWriter::finish(const RunResult& r) {
   j["channels"] = channels;
   j["peaks"] = {{"method",
                  "tracked at every output, accepted integrator step and event; turning points "
-                 "between steps refined by golden-section search on the dense output"},
+                 "between steps refined by Brent's method on the dense output"},
                 {"refinements", extrema_.refinements()},
                 {"evaluations", extrema_.evaluations()}};
   json cj = json::object();
