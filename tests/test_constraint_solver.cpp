@@ -273,3 +273,53 @@ solver: {end_time: 10, output_interval: 0.01, rtol: 1.0e-8, atol: 1.0e-10}
     EXPECT_LT(drift / max_ke, 1e-4);
   }
 }
+
+TEST(FixedPatternLdlt, FactorsQuasiDefiniteMatricesAndRecoversFromABadPivot) {
+  // A quasi-definite matrix [H Aᵀ; A −E] (H, E positive definite) with fill: H tridiagonal,
+  // A coupling each constraint to three coordinates, E diagonal; symmetric permutations of it
+  // all have an LDLᵀ factorisation. Checked against Eigen's dense solve.
+  const int nh = 30, na = 12, n = nh + na;
+  Eigen::MatrixXd full = Eigen::MatrixXd::Zero(n, n);
+  for (int i = 0; i < nh; ++i) {
+    full(i, i) = 4.0 + 0.1 * i;
+    if (i + 1 < nh) full(i, i + 1) = full(i + 1, i) = -1.0;
+  }
+  for (int a = 0; a < na; ++a) {
+    for (int c : {2 * a, 2 * a + 3, (7 * a + 5) % nh}) full(nh + a, c) = full(c, nh + a) = 1.0 + 0.3 * c;
+    full(nh + a, nh + a) = -1e-3 * (1 + a);
+  }
+  // An interleaved order (rows among coordinates), as the solver's body order makes.
+  std::vector<int> order;
+  for (int i = 0; i < nh; ++i) {
+    order.push_back(i);
+    if (i % 3 == 2 && i / 3 < na) order.push_back(nh + i / 3);
+  }
+  for (int a = nh / 3; a < na; ++a) order.push_back(nh + a);
+  ASSERT_EQ(static_cast<int>(order.size()), n);
+  Eigen::MatrixXd p(n, n);
+  for (int u = 0; u < n; ++u)
+    for (int v = 0; v < n; ++v) p(u, v) = full(order[u], order[v]);
+  std::vector<signed char> sign(n);
+  for (int u = 0; u < n; ++u) sign[u] = order[u] < nh ? 1 : -1;
+  FixedPatternLdlt::SparseMatrix upper = p.triangularView<Eigen::Upper>().toDenseMatrix().sparseView();
+  FixedPatternLdlt ldlt;
+  ldlt.analyze(upper);
+  const Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(n, -1.0, 2.0);
+  const Eigen::VectorXd reference = p.fullPivLu().solve(b);
+  ASSERT_TRUE(ldlt.factorize(upper, sign));
+  Eigen::VectorXd x = b;
+  ldlt.solve(x);
+  EXPECT_LT((x - reference).norm(), 1e-12 * reference.norm());
+  // A pivot of the wrong sign (the first constraint's E entry made positive and large) stops
+  // the factorisation there; the next one, of the good matrix, is exact again.
+  FixedPatternLdlt::SparseMatrix bad = upper;
+  const int first_row = static_cast<int>(std::find(sign.begin(), sign.end(), -1) - sign.begin());
+  ASSERT_LT(first_row, n / 2);  // early: the rows after it are left unfactored
+  bad.coeffRef(first_row, first_row) = 1e6;
+  EXPECT_FALSE(ldlt.factorize(bad, sign));
+  ASSERT_TRUE(ldlt.factorize(upper, sign));
+  x = b;
+  ldlt.solve(x);
+  EXPECT_LT((x - reference).norm(), 1e-12 * reference.norm());
+  for (int u = 0; u < n; ++u) EXPECT_GT(sign[u] * ldlt.diagonal()[u], 0.0);
+}

@@ -270,11 +270,93 @@ static void build_solver(const Model& model, Workspace& ws, const Eigen::MatrixX
     }
   }
   s->phi_begin.push_back(static_cast<int>(s->phi_col.size()));
-  s->ldlt.analyzePattern(s->k);
-  s->b.resize(n);
+  s->sign.assign(n, 1);
+  for (int a = 0; a < ma; ++a) s->sign[s->pos[nq + a]] = -1;
+  s->ldlt.analyze(s->k);
   s->x.resize(n);
   ws.lambda.setZero();
   ws.solver = std::move(s);
+}
+
+void FixedPatternLdlt::analyze(const SparseMatrix& upper) {
+  // Eigen's symbolic analysis: the elimination tree and the column counts of L.
+  struct Analysis : Eigen::SimplicialLDLT<SparseMatrix, Eigen::Upper, Eigen::NaturalOrdering<int>> {
+    const Eigen::VectorXi& parent() const { return m_parent; }
+    const Eigen::VectorXi& counts() const { return m_nonZerosPerCol; }
+  } analysis;
+  analysis.analyzePattern(upper);
+  const int n = static_cast<int>(upper.rows());
+  col_begin_.assign(n + 1, 0);
+  for (int j = 0; j < n; ++j) col_begin_[j + 1] = col_begin_[j] + analysis.counts()[j];
+  col_row_.assign(col_begin_[n], 0);
+  col_value_.assign(col_begin_[n], 0.0);
+  // Row k's pattern: every entry (i, k), i < k, of the upper triangle and its tree path up to
+  // k. Rows are visited in order, so column i's entries are stored in row order.
+  row_begin_.assign(1, 0);
+  row_col_.clear();
+  row_slot_.clear();
+  std::vector<int> mark(n, -1), filled(n, 0), cols;
+  for (int k = 0; k < n; ++k) {
+    cols.clear();
+    mark[k] = k;
+    for (SparseMatrix::InnerIterator it(upper, k); it; ++it)
+      for (int i = it.index(); i < k && mark[i] != k; i = analysis.parent()[i]) {
+        mark[i] = k;
+        cols.push_back(i);
+      }
+    std::sort(cols.begin(), cols.end());  // ascending: a topological order of the tree
+    for (int i : cols) {
+      const int slot = col_begin_[i] + filled[i]++;
+      if (slot >= col_begin_[i + 1]) throw std::logic_error("FixedPatternLdlt: column count exceeded");
+      col_row_[slot] = k;
+      row_col_.push_back(i);
+      row_slot_.push_back(slot);
+    }
+    row_begin_.push_back(static_cast<int>(row_col_.size()));
+  }
+  d_.setZero(n);
+  y_.setZero(n);
+}
+
+bool FixedPatternLdlt::factorize(const SparseMatrix& upper, const std::vector<signed char>& sign) {
+  const int n = static_cast<int>(upper.rows());
+  const int* ap = upper.outerIndexPtr();
+  const int* ai = upper.innerIndexPtr();
+  const double* ax = upper.valuePtr();
+  for (int k = 0; k < n; ++k) {
+    // Row k of L: the triangular solve L(0:k, 0:k) D l = A(0:k, k) over row k's pattern.
+    for (int p = ap[k]; p < ap[k + 1]; ++p) y_[ai[p]] = ax[p];
+    double d = y_[k];
+    y_[k] = 0.0;
+    for (int e = row_begin_[k]; e < row_begin_[k + 1]; ++e) {
+      const int i = row_col_[e], slot = row_slot_[e];
+      const double yi = y_[i];
+      y_[i] = 0.0;
+      for (int p = col_begin_[i]; p < slot; ++p) y_[col_row_[p]] -= col_value_[p] * yi;
+      const double l = yi / d_[i];
+      d -= l * yi;
+      col_value_[slot] = l;
+    }
+    d_[k] = d;
+    // y is all 0 again (every entry touched is in row k's pattern, or k): a failed factorisation
+    // leaves nothing behind.
+    if (!(sign[k] * d > 0.0)) return false;
+  }
+  return true;
+}
+
+void FixedPatternLdlt::solve(Eigen::VectorXd& x) const {
+  const int n = static_cast<int>(d_.size());
+  for (int j = 0; j < n; ++j) {
+    const double xj = x[j];
+    for (int p = col_begin_[j]; p < col_begin_[j + 1]; ++p) x[col_row_[p]] -= col_value_[p] * xj;
+  }
+  for (int j = 0; j < n; ++j) x[j] /= d_[j];
+  for (int j = n - 1; j >= 0; --j) {
+    double v = x[j];
+    for (int p = col_begin_[j]; p < col_begin_[j + 1]; ++p) v -= col_value_[p] * x[col_row_[p]];
+    x[j] = v;
+  }
 }
 
 void prepare_constraint_solver(const Model& model, Workspace& ws, const Eigen::MatrixXd& phi_q) {
@@ -291,8 +373,7 @@ void prepare_constraint_solver(const Model& model, Workspace& ws, const Eigen::M
       v[s.phi_slot[e]] = phi_q(s.active[a], s.phi_col[e]);
     v[s.slot_reg[a]] = -s.regularisation[a];
   }
-  s.ldlt.factorize_in_place(s.k);
-  bool ok = s.ldlt.info() == Eigen::Success;
+  bool ok = s.ldlt.factorize(s.k, s.sign);
   for (int a = 0; a < ma && ok; ++a) ok = -s.ldlt.diagonal()[s.pos[nq + a]] > 1e-10 * s.w_diag[a];
   if (!ok) {
     const std::vector<std::string> warnings = ws.warnings;
@@ -308,9 +389,9 @@ bool solve_constraints(Workspace& ws) {
   for (int a = 0; a < ma; ++a) {
     const int row = s.active[a];
     for (int e = s.phi_begin[a]; e < s.phi_begin[a + 1]; ++e) v[s.phi_slot[e]] = ws.phi_q(row, s.phi_col[e]);
-    s.b[s.pos[nq + a]] = ws.rhs_m[row];
+    s.x[s.pos[nq + a]] = ws.rhs_m[row];
   }
-  for (int k = 0; k < nq; ++k) s.b[s.pos[k]] = ws.g[k];
+  for (int k = 0; k < nq; ++k) s.x[s.pos[k]] = ws.g[k];
   // Factor; a pivot of the wrong sign (the quasi-definite inertia lost to round-off: W singular
   // to working precision) repeats it with a larger ε.
   double factor = 1.0;
@@ -321,15 +402,10 @@ bool solve_constraints(Workspace& ws) {
       ++s.regularised;
     }
     for (int a = 0; a < ma; ++a) v[s.slot_reg[a]] = -factor * s.regularisation[a];
-    s.ldlt.factorize_in_place(s.k);
-    ok = s.ldlt.info() == Eigen::Success;
-    if (!ok) continue;
-    const Eigen::VectorXd& d = s.ldlt.diagonal();
-    for (int k = 0; k < nq && ok; ++k) ok = d[s.pos[k]] > 0.0;
-    for (int a = 0; a < ma && ok; ++a) ok = d[s.pos[nq + a]] < 0.0;
+    ok = s.ldlt.factorize(s.k, s.sign);
   }
   if (!ok) return false;
-  s.x = s.ldlt.solve(s.b);
+  s.ldlt.solve(s.x);
   for (int k = 0; k < nq; ++k) ws.qdd[k] = s.x[s.pos[k]];
   for (int a = 0; a < ma; ++a) ws.lambda[s.active[a]] = -s.x[s.pos[nq + a]];
   return true;
