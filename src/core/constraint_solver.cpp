@@ -315,6 +315,7 @@ void FixedPatternLdlt::analyze(const SparseMatrix& upper) {
     row_begin_.push_back(static_cast<int>(row_col_.size()));
   }
   d_.setZero(n);
+  d_inverse_.setZero(n);
   y_.setZero(n);
 }
 
@@ -333,11 +334,12 @@ bool FixedPatternLdlt::factorize(const SparseMatrix& upper, const std::vector<si
       const double yi = y_[i];
       y_[i] = 0.0;
       for (int p = col_begin_[i]; p < slot; ++p) y_[col_row_[p]] -= col_value_[p] * yi;
-      const double l = yi / d_[i];
+      const double l = yi * d_inverse_[i];
       d -= l * yi;
       col_value_[slot] = l;
     }
     d_[k] = d;
+    d_inverse_[k] = 1.0 / d;
     // y is all 0 again (every entry touched is in row k's pattern, or k): a failed factorisation
     // leaves nothing behind.
     if (!(sign[k] * d > 0.0)) return false;
@@ -351,7 +353,7 @@ void FixedPatternLdlt::solve(Eigen::VectorXd& x) const {
     const double xj = x[j];
     for (int p = col_begin_[j]; p < col_begin_[j + 1]; ++p) x[col_row_[p]] -= col_value_[p] * xj;
   }
-  for (int j = 0; j < n; ++j) x[j] /= d_[j];
+  for (int j = 0; j < n; ++j) x[j] *= d_inverse_[j];
   for (int j = n - 1; j >= 0; --j) {
     double v = x[j];
     for (int p = col_begin_[j]; p < col_begin_[j + 1]; ++p) v -= col_value_[p] * x[col_row_[p]];

@@ -73,7 +73,7 @@ class FixedPatternLdlt {
   std::vector<int> col_begin_, col_row_;   ///< L's strict lower triangle by columns (CSC)
   std::vector<double> col_value_;
   std::vector<int> row_begin_, row_col_, row_slot_;  ///< per row k: columns i < k, slot of L(k,i)
-  Eigen::VectorXd d_, y_;
+  Eigen::VectorXd d_, d_inverse_, y_;  ///< D, its inverse, the factorisation's work vector
 };
 
 /// The sparse solver of one workspace: pattern, elimination order and factorisation.

@@ -12,16 +12,22 @@ namespace lash {
 
 namespace {
 
-/// Largest value of the cubic Hermite interpolant through (0, v0, slope h·d0), (1, v1, h·d1),
-/// sampled at 33 points: an estimate of a turning point's height inside a step.
+/// Largest value on [0, 1] of the cubic Hermite interpolant through (0, v0, slope h·d0) and
+/// (1, v1, h·d1): an estimate of a turning point's height inside a step. The cubic
+/// p(s) = αs³ + βs² + γs + v0 turns where p'(s) = 3αs² + 2βs + γ = 0.
 double hermite_max(double v0, double d0, double v1, double d1, double h) {
+  const double gamma = h * d0, beta = 3.0 * (v1 - v0) - 2.0 * gamma - h * d1,
+               alpha = 2.0 * (v0 - v1) + gamma + h * d1;
   double best = std::max(v0, v1);
-  for (int k = 1; k < 32; ++k) {
-    const double s = k / 32.0, s2 = s * s, s3 = s2 * s;
-    const double v = (2 * s3 - 3 * s2 + 1) * v0 + (s3 - 2 * s2 + s) * h * d0 +
-                     (-2 * s3 + 3 * s2) * v1 + (s3 - s2) * h * d1;
-    best = std::max(best, v);
-  }
+  auto at = [&](double s) {
+    if (s > 0.0 && s < 1.0) best = std::max(best, ((alpha * s + beta) * s + gamma) * s + v0);
+  };
+  const double disc = beta * beta - 3.0 * alpha * gamma;  // of p'/1, a quarter of 4β² − 12αγ
+  if (disc < 0.0) return best;
+  // Both roots without cancellation: q = −(β + sign(β)√disc), s = q/(3α) and s = γ/q.
+  const double q = -(beta + std::copysign(std::sqrt(disc), beta));
+  if (alpha != 0.0) at(q / (3.0 * alpha));
+  if (q != 0.0) at(gamma / q);
   return best;
 }
 
