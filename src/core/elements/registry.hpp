@@ -31,7 +31,7 @@ class ChannelSink {
   void element(const std::string& name) { prefix_ = &name; }
   void add(const char* quantity, const char* unit, const char* description, double value) {
     if (info_)
-      info_->push_back({prefix_->empty() ? quantity : *prefix_ + "." + quantity, unit, description});
+      describe(quantity, unit, description);
     else
       values_[n_] = value;
     ++n_;
@@ -42,6 +42,10 @@ class ChannelSink {
   bool describing() const { return info_ != nullptr; }
 
  private:
+  /// The description of the next channel (kept out of add(), which runs at every evaluation).
+  [[gnu::noinline]] void describe(const char* quantity, const char* unit, const char* description) {
+    info_->push_back({prefix_->empty() ? quantity : *prefix_ + "." + quantity, unit, description});
+  }
   std::vector<ChannelInfo>* info_ = nullptr;
   double* values_ = nullptr;
   const std::string* prefix_ = &kNone;
