@@ -46,6 +46,9 @@ class Checker {
   bool valid_body(int b) const { return b == kGround || (b >= 0 && b < int(m_.bodies.size())); }
   bool rotates(int b) const { return b == kGround || m_.bodies[b].rotates(); }
   bool flexible(int b) const { return b != kGround && m_.bodies[b].flexible(); }
+  /// An angle to drive, load or lock: the ground, a rigid body, or a flexible link (its axis at
+  /// a point, kinematics.hpp: point_angle); not a point mass.
+  bool has_angle(int b) const { return rotates(b) || flexible(b); }
   /// The element kinds a flexible link takes, for messages.
   static constexpr const char* kOnFlexible =
       "a flexible link takes revolute joints (with or without clearance), fixed joints to a rigid "
@@ -164,7 +167,7 @@ class Checker {
         if (flexible(j.a.body) || flexible(j.b.body)) {
           // A clamped end: the link's axis at the point keeps its initial angle to the other body.
           const int rigid = flexible(j.a.body) ? j.b.body : j.a.body;
-          if (rigid != kGround && !m_.bodies[rigid].rotates() && !m_.bodies[rigid].flexible())
+          if (!has_angle(rigid))
             error(el, "a fixed joint clamps a flexible link to a rigid body or the ground, not to "
                       "a point mass");
           break;
@@ -204,8 +207,7 @@ class Checker {
                                           : "not revolute or translational") +
                              "; drive an ideal revolute or translational joint, or drive the "
                              "body itself (body: NAME, coordinate: phi)");
-      if (j.type == JointType::revolute && ((!rotates(j.a.body) && !flexible(j.a.body)) ||
-                                            (!rotates(j.b.body) && !flexible(j.b.body))))
+      if (j.type == JointType::revolute && (!has_angle(j.a.body) || !has_angle(j.b.body)))
         return error(el, "joint '" + j.name + "' holds a point mass, which has no angle to drive");
       if (std::isnan(d.initial)) {
         if (j.type == JointType::revolute) {
@@ -236,7 +238,7 @@ class Checker {
         break;
       case LoadType::torque:
         if (!valid_body(l.body_a)) return error(el, "body out of range");
-        if (!rotates(l.body_a) && !flexible(l.body_a))
+        if (!has_angle(l.body_a))
           error(el, "body '" + body_name(l.body_a) + "' is a point mass: it takes no torque");
         break;
       case LoadType::spring_damper:
@@ -249,7 +251,7 @@ class Checker {
         break;
       case LoadType::torsional_spring_damper:
         if (!valid_body(l.body_a) || !valid_body(l.body_b)) return error(el, "body out of range");
-        if ((!rotates(l.body_a) && !flexible(l.body_a)) || (!rotates(l.body_b) && !flexible(l.body_b)))
+        if (!has_angle(l.body_a) || !has_angle(l.body_b))
           error(el, "a torsional spring needs two rotating bodies (a point mass has no angle)");
         if (std::isnan(l.angle0))
           l.angle0 = initial_angle(m_, l.body_b) - initial_angle(m_, l.body_a);
@@ -263,10 +265,10 @@ class Checker {
         l.body_b = l.b.body;
         if (l.frame_body != kGround && l.frame_body != l.a.body && l.frame_body != l.b.body)
           error(el, "frame must be one of the two bodies it joins, or ground");
-        else if (!rotates(l.frame_body) && !flexible(l.frame_body))
+        else if (!has_angle(l.frame_body))
           error(el, "frame '" + body_name(l.frame_body) + "' is a point mass, which has no axes");
         if ((l.stiffness != 0.0 || l.damping != 0.0) &&
-            ((!rotates(l.a.body) && !flexible(l.a.body)) || (!rotates(l.b.body) && !flexible(l.b.body))))
+            (!has_angle(l.a.body) || !has_angle(l.b.body)))
           error(el, "a torsional part needs two rotating bodies (a point mass has no angle)");
         if (std::isnan(l.angle0))
           l.angle0 = initial_angle(m_, l.body_b) - initial_angle(m_, l.body_a);
@@ -286,7 +288,6 @@ class Checker {
     if (!(n > 0) || !std::isfinite(n)) error(el, "axis must be a non-zero vector");
     else s.axis /= n;
     if (s.mass < 0 || !std::isfinite(s.mass)) error(el, "mass must be >= 0 kg");
-
   }
 
   void mount_sensor_masses() {

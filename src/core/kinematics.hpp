@@ -175,11 +175,13 @@ inline double point_angle(const BodyKin& k, const PointKin& p) {
   return p.beam ? std::atan2(p.slope.y(), p.slope.x()) : k.phi;
 }
 
-/// Adds a torque τ on a rigid body to g. Returns its power τω.
-inline double apply_torque(Eigen::VectorXd& g, const BodyKin& k, double tau) {
-  if (k.block.rot < 0) return 0.0;
-  g[k.block.rot] += tau;
-  return tau * k.omega;
+/// θ_b − θ_a − angle0, the angles of the material at points a and b (point_angle). With a
+/// flexible link it is taken within (−π, π], so that a link's wrapped angle and a rigid body's
+/// unwrapped one compare (continuous where the difference stays small).
+inline double relative_angle(const BodyKin& ka, const PointKin& pa, const BodyKin& kb,
+                             const PointKin& pb, double angle0) {
+  const double theta = point_angle(kb, pb) - point_angle(ka, pa) - angle0;
+  return pa.beam || pb.beam ? std::remainder(theta, 2.0 * M_PI) : theta;
 }
 
 /// Adds a rigid body's entries to one row of Φ_q: ∂Φ/∂(x, y) = (dx, dy) and ∂Φ/∂φ = dphi.

@@ -40,8 +40,7 @@ void apply(const Model&, Workspace& ws, const Load& l, int index) {
   out.power = apply_force(ws.g, pa, f) + apply_force(ws.g, pb, -f) +
               (pf ? apply_point_torque(ws.g, *pf, turning) : 0.0);
   // Torsional part.
-  double theta = point_angle(kb, pb) - point_angle(ka, pa) - l.angle0;
-  if (pa.beam || pb.beam) theta = std::remainder(theta, 2.0 * M_PI);
+  const double theta = relative_angle(ka, pa, kb, pb, l.angle0);
   const double theta_dot = pb.omega - pa.omega;
   out.torque = l.stiffness * theta + l.damping * theta_dot;
   out.power += apply_point_torque(ws.g, pa, out.torque) + apply_point_torque(ws.g, pb, -out.torque);

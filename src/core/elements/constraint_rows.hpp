@@ -24,14 +24,13 @@ inline void revolute_rows(const Workspace& ws, const PointRef& a, const PointRef
 /// Φ = θ_b − θ_a − f (1 row), θ the angle of the material at points a and b (kinematics.hpp:
 /// point_angle): a rigid body's φ (the ground's 0), or on a flexible link the direction of its
 /// axis there, θ = atan2(r'_y, r'_x) with ∂θ/∂e = perp(r')ᵀS'/|r'|², θ̇ = r' × ṙ'/|r'|² and the
-/// velocity part of θ̈ −2θ̇ (r'·ṙ')/|r'|². With a link, Φ is taken within (−π, π] so that its
-/// wrapped angle and a rigid body's unwrapped one compare (continuous where the row holds).
+/// velocity part of θ̈ −2θ̇ (r'·ṙ')/|r'|². With a link, Φ is taken within (−π, π]
+/// (relative_angle).
 inline void angle_row(const Workspace& ws, const PointRef& a, const PointRef& b, double f,
                       double fd, double fdd, int row, ConstraintOut& out) {
   const BodyKin &ka = ws.kin_of(a.body), &kb = ws.kin_of(b.body);
   const PointKin pa = point_kin(ka, a.s), pb = point_kin(kb, b.s);
-  out.phi[row] = point_angle(kb, pb) - point_angle(ka, pa) - f;
-  if (pa.beam || pb.beam) out.phi[row] = std::remainder(out.phi[row], 2.0 * M_PI);
+  out.phi[row] = relative_angle(ka, pa, kb, pb, f);
   auto side = [&](const BodyKin& k, const PointKin& p, double sign) {
     if (!p.beam) {
       put_row(out.phi_q, row, k, 0, 0, sign);

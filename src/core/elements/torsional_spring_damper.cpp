@@ -10,8 +10,7 @@ namespace {
 void apply(const Model&, Workspace& ws, const Load& l, int index) {
   const BodyKin &ka = ws.kin_of(l.body_a), &kb = ws.kin_of(l.body_b);
   const PointKin pa = point_kin(ka, l.a.s), pb = point_kin(kb, l.b.s);
-  double theta = point_angle(kb, pb) - point_angle(ka, pa) - l.angle0;
-  if (pa.beam || pb.beam) theta = std::remainder(theta, 2.0 * M_PI);
+  const double theta = relative_angle(ka, pa, kb, pb, l.angle0);
   const double theta_dot = pb.omega - pa.omega;
   LoadOutput& out = ws.load_out[index];
   out.torque = l.stiffness * theta + l.damping * theta_dot;
