@@ -31,8 +31,8 @@ TEST(HertzStiffness, ReferenceCheckValue) {
 TEST(NormalLaws, ZeroOutsideContact) {
   const auto p = params(0.9);
   for (const auto& info : kNormalLaws) {
-    EXPECT_EQ(normal_force(info.law, 0.0, 1.0, 1.0, p), 0.0) << info.name;
-    EXPECT_EQ(normal_force(info.law, -1e-6, 1.0, 1.0, p), 0.0) << info.name;
+    EXPECT_EQ(normal_force(info.law, 0.0, 1.0, 1.0, p).total, 0.0) << info.name;
+    EXPECT_EQ(normal_force(info.law, -1e-6, 1.0, 1.0, p).total, 0.0) << info.name;
   }
 }
 
@@ -62,14 +62,14 @@ TEST(NormalLaws, LankaraniNikraveshErkayaFormWithHysteresisDamping) {
 TEST(NormalLaws, ElasticWhenRestitutionIsOne) {
   const auto p = params(1.0);
   for (auto law : {NormalLaw::hunt_crossley, NormalLaw::lankarani_nikravesh, NormalLaw::flores})
-    EXPECT_DOUBLE_EQ(normal_force(law, 3e-6, 5.0, 1.0, p), hertz(3e-6, p));
+    EXPECT_DOUBLE_EQ(normal_force(law, 3e-6, 5.0, 1.0, p).total, hertz(3e-6, p));
 }
 
 TEST(NormalLaws, NeverPulls) {
   const auto p = params(0.5);
   // Fast separation: the damping term exceeds the elastic one; the force is clipped at 0.
   for (const auto& info : kNormalLaws)
-    EXPECT_GE(normal_force(info.law, 1e-7, -1e3, 0.01, p), 0.0) << info.name;
+    EXPECT_GE(normal_force(info.law, 1e-7, -1e3, 0.01, p).total, 0.0) << info.name;
   EXPECT_EQ(lankarani_nikravesh(1e-7, -1e3, 0.01, p), 0.0);
 }
 
@@ -83,8 +83,18 @@ TEST(NormalLaws, RegistryNamesRoundTrip) {
 }
 
 TEST(ContactPotential, DerivativeIsTheElasticForce) {
+  // Every law stores K δ^(n+1)/(n+1); its derivative is the elastic part K δⁿ, and that is the
+  // whole force of a law without damping.
   const auto p = params(0.9);
   const double d = 4e-6, h = 1e-11;
-  const double dv = (contact_potential(d + h, p) - contact_potential(d - h, p)) / (2 * h);
-  EXPECT_NEAR(dv / hertz(d, p), 1.0, 1e-6);
+  for (const auto& info : kNormalLaws) {
+    const double dv = (normal_force(info.law, d + h, 0.3, 1.0, p).potential -
+                       normal_force(info.law, d - h, 0.3, 1.0, p).potential) /
+                      (2 * h);
+    const NormalForce f = normal_force(info.law, d, 0.3, 1.0, p);
+    EXPECT_NEAR(dv / f.elastic, 1.0, 1e-6) << info.name;
+    EXPECT_DOUBLE_EQ(f.elastic, hertz(d, p)) << info.name;
+  }
+  EXPECT_NEAR(normal_force(NormalLaw::hertz, d, 0.3, 1.0, p).potential,
+              p.stiffness * std::pow(d, 2.5) / 2.5, 1e-12 * p.stiffness * std::pow(d, 2.5));
 }

@@ -13,11 +13,22 @@ double hunt_crossley_factor(double ce) { return 3.0 * (1.0 - ce) / 2.0; }
 double lankarani_nikravesh_factor(double ce) { return 3.0 * (1.0 - ce * ce) / 4.0; }
 double flores_factor(double ce) { return 8.0 * (1.0 - ce) / (5.0 * ce); }
 
-double damped_hertz(double delta, double delta_dot, double delta_dot_impact, double factor,
-                    const ContactParams& p) {
-  if (delta <= 0.0) return 0.0;
-  const double elastic = p.stiffness * std::pow(delta, p.exponent);
-  return std::max(0.0, elastic * (1.0 + factor * delta_dot / delta_dot_impact));
+/// F_N of `law` at δ > 0 from its elastic part K δⁿ, which every law shares.
+double from_elastic(NormalLaw law, double elastic, double delta, double delta_dot,
+                    double delta_dot_impact, const ContactParams& p) {
+  auto damped = [&](double factor) {
+    return std::max(0.0, elastic * (1.0 + factor * delta_dot / delta_dot_impact));
+  };
+  switch (law) {
+    case NormalLaw::hertz: return elastic;
+    case NormalLaw::hunt_crossley: return damped(hunt_crossley_factor(p.restitution));
+    case NormalLaw::lankarani_nikravesh: return damped(lankarani_nikravesh_factor(p.restitution));
+    case NormalLaw::flores: return damped(flores_factor(p.restitution));
+    case NormalLaw::impact:
+      return std::max(
+          0.0, elastic + step(delta, 0.0, 0.0, p.damping_depth, p.damping_max) * delta_dot);
+  }
+  return 0.0;
 }
 }  // namespace
 
@@ -30,28 +41,26 @@ double hertz_cylinder_stiffness(double r_bearing, double r_journal, double e_bea
 }
 
 double hertz(double delta, const ContactParams& p) {
-  return delta > 0.0 ? p.stiffness * std::pow(delta, p.exponent) : 0.0;
+  return normal_force(NormalLaw::hertz, delta, 0.0, 1.0, p).total;
 }
 
 double hunt_crossley(double delta, double delta_dot, double delta_dot_impact,
                      const ContactParams& p) {
-  return damped_hertz(delta, delta_dot, delta_dot_impact, hunt_crossley_factor(p.restitution), p);
+  return normal_force(NormalLaw::hunt_crossley, delta, delta_dot, delta_dot_impact, p).total;
 }
 
 double lankarani_nikravesh(double delta, double delta_dot, double delta_dot_impact,
                            const ContactParams& p) {
-  return damped_hertz(delta, delta_dot, delta_dot_impact,
-                      lankarani_nikravesh_factor(p.restitution), p);
+  return normal_force(NormalLaw::lankarani_nikravesh, delta, delta_dot, delta_dot_impact, p)
+      .total;
 }
 
 double flores(double delta, double delta_dot, double delta_dot_impact, const ContactParams& p) {
-  return damped_hertz(delta, delta_dot, delta_dot_impact, flores_factor(p.restitution), p);
+  return normal_force(NormalLaw::flores, delta, delta_dot, delta_dot_impact, p).total;
 }
 
 double impact_law(double delta, double delta_dot, const ContactParams& p) {
-  if (delta <= 0.0) return 0.0;
-  const double damping = step(delta, 0.0, 0.0, p.damping_depth, p.damping_max);
-  return std::max(0.0, p.stiffness * std::pow(delta, p.exponent) + damping * delta_dot);
+  return normal_force(NormalLaw::impact, delta, delta_dot, 1.0, p).total;
 }
 
 std::optional<NormalLaw> normal_law_from_name(std::string_view name) {
@@ -66,22 +75,14 @@ std::string_view normal_law_name(NormalLaw law) {
   return "?";
 }
 
-double normal_force(NormalLaw law, double delta, double delta_dot, double delta_dot_impact,
-                    const ContactParams& p) {
-  switch (law) {
-    case NormalLaw::hertz: return hertz(delta, p);
-    case NormalLaw::hunt_crossley: return hunt_crossley(delta, delta_dot, delta_dot_impact, p);
-    case NormalLaw::lankarani_nikravesh:
-      return lankarani_nikravesh(delta, delta_dot, delta_dot_impact, p);
-    case NormalLaw::flores: return flores(delta, delta_dot, delta_dot_impact, p);
-    case NormalLaw::impact: return impact_law(delta, delta_dot, p);
-  }
-  return 0.0;
-}
-
-double contact_potential(double delta, const ContactParams& p) {
-  if (delta <= 0.0) return 0.0;
-  return p.stiffness * std::pow(delta, p.exponent + 1.0) / (p.exponent + 1.0);
+NormalForce normal_force(NormalLaw law, double delta, double delta_dot, double delta_dot_impact,
+                         const ContactParams& p) {
+  if (delta <= 0.0) return {};
+  NormalForce f;
+  f.elastic = p.stiffness * std::pow(delta, p.exponent);
+  f.total = from_elastic(law, f.elastic, delta, delta_dot, delta_dot_impact, p);
+  f.potential = f.elastic * delta / (p.exponent + 1.0);
+  return f;
 }
 
 }  // namespace lash

@@ -67,12 +67,16 @@ inline constexpr std::array<NormalLawInfo, 5> kNormalLaws{{
 std::optional<NormalLaw> normal_law_from_name(std::string_view name);
 std::string_view normal_law_name(NormalLaw law);
 
-/// Dispatches to the named law.
-double normal_force(NormalLaw law, double delta, double delta_dot, double delta_dot_impact,
-                    const ContactParams& p);
+/// A normal law's force at one instant, with the parts the energy bookkeeping needs.
+struct NormalForce {
+  double total = 0.0;      ///< F_N of the law, N (≥ 0)
+  double elastic = 0.0;    ///< its conservative part K δⁿ, N (the same for every law)
+  double potential = 0.0;  ///< elastic energy stored, K δ^(n+1)/(n+1) = K δⁿ · δ/(n+1), J
+};
 
-/// Elastic potential energy stored at penetration δ: K δ^(n+1)/(n+1) (J). The conservative part
-/// of every law above is K δⁿ, so the rest of F_N is dissipative.
-double contact_potential(double delta, const ContactParams& p);
+/// The named law at (δ, δ̇, δ̇⁻); all zero for δ ≤ 0. The rest of F_N beyond the elastic part is
+/// dissipative.
+NormalForce normal_force(NormalLaw law, double delta, double delta_dot, double delta_dot_impact,
+                         const ContactParams& p);
 
 }  // namespace lash

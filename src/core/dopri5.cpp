@@ -158,6 +158,7 @@ class Dopri5 final : public Integrator {
       k1_prev_ = k1_;
       k1_ = k7_;
       have_step_ = true;
+      end_evaluated_ = true;  // k7 = f(t_, y_); a step cut at an event clears it
       ++stats_.steps;
       stats_.last_step = h;
       h_ = h * std::clamp(fac, 0.2, rejected_last ? 1.0 : 10.0);
@@ -168,6 +169,7 @@ class Dopri5 final : public Integrator {
   }
 
   void dense_at(double t, Eigen::VectorXd& y) override { dense(t, y); }
+  const Eigen::VectorXd* evaluated_end() const override { return end_evaluated_ ? &y_ : nullptr; }
 
   void dense(double t, Eigen::VectorXd& y) const {
     const double th = (t - t_old_) / h_step_, th1 = 1.0 - th;
@@ -214,6 +216,7 @@ class Dopri5 final : public Integrator {
   /// The redone state must lie past the crossing too (g_k > 0); at a grazing crossing it may not,
   /// and then the original step's dense output at t_e, which does by construction, is kept.
   void redo_step_to(double t_e, int k) {
+    end_evaluated_ = false;
     auto keep_dense = [&]() {
       dense(t_e, ye_);
       y_ = ye_;
@@ -300,7 +303,7 @@ class Dopri5 final : public Integrator {
   IntegratorOptions o_;
   IntegratorStats stats_;
   double t_ = 0.0, t_old_ = 0.0, h_ = 0.0, h_step_ = 0.0, t_event_ = 0.0;
-  bool have_step_ = false, need_k1_ = true, pending_event_ = false;
+  bool have_step_ = false, need_k1_ = true, pending_event_ = false, end_evaluated_ = false;
   Eigen::VectorXd y_, k1_prev_, k1_, k2_, k3_, k4_, k5_, k6_, k7_, yt_, ynew_, r1_, r2_, r3_, r4_, r5_, ye_;
   Eigen::VectorXd g_old_, g_new_, g_tmp_;
 };

@@ -66,6 +66,11 @@ class Integrator {
   /// (Dormand–Prince: its 4th-order continuous extension; CVODE: CVodeGetDky on its
   /// interpolating polynomial).
   virtual void dense_at(double t, Eigen::VectorXd& y) = 0;
+  /// While the hook runs: the state at the step's end t1 if the right-hand side's most recent
+  /// evaluation was exactly (t1, that state), so whatever it filled in still describes t1;
+  /// otherwise nullptr (then evaluate at dense_at(t1)). Dormand–Prince's last stage is its step
+  /// end (first same as last), except where a step was cut at an event.
+  virtual const Eigen::VectorXd* evaluated_end() const { return nullptr; }
 
  protected:
   StepHook hook_;

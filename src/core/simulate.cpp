@@ -63,8 +63,13 @@ class DenseProbe final : public StepProbe {
     integrator_.dense_at(t, y_);
     return evaluate(model_, ws_, t, y_.data(), ydot_.data());
   }
+  bool at_end() override {
+    y_ = y_end;
+    return evaluate(model_, ws_, t_end, y_.data(), ydot_.data());
+  }
   const Eigen::VectorXd& state() const override { return y_; }
   const Workspace& workspace() const override { return ws_; }
+  double t_end = 0.0;
   Eigen::VectorXd y_end;  ///< the state at the step's end, as reported
 
  private:
@@ -83,9 +88,15 @@ void Simulator::hook_steps(Observer* observer) {
   if (!observer) return integrator_->set_step_hook({});
   auto probe = std::make_shared<DenseProbe>(model_, ws_, *integrator_);
   integrator_->set_step_hook([this, observer, probe](double t0, double t1) {
-    // The step's end, evaluated as an output would be, then whatever the observer probes.
-    if (!probe->at(t1)) return;  // not finite: the run loop reports it
-    probe->y_end = probe->state();
+    // The step's end, evaluated as an output would be (the integrator's last evaluation may
+    // have been exactly there), then whatever the observer probes.
+    probe->t_end = t1;
+    if (const Eigen::VectorXd* y1 = integrator_->evaluated_end()) {
+      probe->y_end = *y1;
+    } else {
+      if (!probe->at(t1)) return;  // not finite: the run loop reports it
+      probe->y_end = probe->state();
+    }
     observer->step(t0, t1, probe->y_end, ws_, *probe);
   });
 }

@@ -42,6 +42,8 @@ class StepProbe {
   /// Evaluates the workspace (forces, accelerations: everything the outputs show) at t in the
   /// step [t0, t1]; the state there is state(). False if it cannot be evaluated there.
   virtual bool at(double t) = 0;
+  /// Evaluates the workspace again at the step's end, the (t1, y) that step() was given.
+  virtual bool at_end() = 0;
   virtual const Eigen::VectorXd& state() const = 0;
   virtual const Workspace& workspace() const = 0;
 };

@@ -337,7 +337,7 @@ class Collector : public Observer {
     }
     extra_->step(t0, t1, y, ws, probe);
     // The probe moved `ws` away from t1: evaluate it there again for the second user.
-    if (extrema && probe.at(t1)) extrema->step(t0, t1, probe.state(), probe.workspace(), probe);
+    if (extrema && probe.at_end()) extrema->step(t0, t1, probe.state(), probe.workspace(), probe);
   }
   void section(double t, const Eigen::VectorXd& y, const Workspace& ws) override {
     if (extra_) extra_->section(t, y, ws);

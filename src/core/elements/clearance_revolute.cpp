@@ -53,7 +53,8 @@ void clearance_forces(const Model& model, Workspace& ws, int k, const double* y,
   // δ̇⁻ is the value located at onset; a stage that overshoots an unlocated onset uses δ̇.
   const double v_impact = std::max(
       ws.contact[k].in_contact ? y[ws.aux_impact[k]] : out.delta_dot, cl.min_impact_velocity);
-  out.f_n = normal_force(cl.normal_law, out.delta, out.delta_dot, v_impact, cl.contact);
+  const NormalForce nf = normal_force(cl.normal_law, out.delta, out.delta_dot, v_impact, cl.contact);
+  out.f_n = nf.total;
   if (iz >= 0) {
     const LuGreOutput lg = lugre_friction(y[iz], out.v_t, out.f_n, cl.lugre);
     out.f_t = lg.force;
@@ -61,9 +62,8 @@ void clearance_forces(const Model& model, Workspace& ws, int k, const double* y,
   } else {
     out.f_t = friction_force(cl.friction_law, out.v_t, out.f_n, cl.friction);
   }
-  out.potential = contact_potential(out.delta, cl.contact);
-  const double elastic = hertz(out.delta, cl.contact);
-  out.dissipation = (out.f_n - elastic) * out.delta_dot - out.f_t * out.v_t;
+  out.potential = nf.potential;
+  out.dissipation = (out.f_n - nf.elastic) * out.delta_dot - out.f_t * out.v_t;
   // Normal force through the centres; friction at each body's contact point, i.e. the friction
   // force at the centre and its moment R f_t about it (n × t = 1).
   out.force = -out.f_n * n + out.f_t * tng;
