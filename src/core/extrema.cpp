@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <string>
 
 #include <boost/math/tools/minima.hpp>
 
@@ -33,9 +34,18 @@ double hermite_max(double v0, double d0, double v1, double d1, double h) {
 
 }  // namespace
 
-ChannelExtrema::ChannelExtrema(const Model& model) : model_(model) {
-  const size_t n = channel_info(model, Workspace(model)).size();
+ChannelExtrema::ChannelExtrema(const Model& model)
+    : model_(model), resolution_(model.solver.rtol) {
+  const std::vector<ChannelInfo> info = channel_info(model, Workspace(model));
+  const size_t n = info.size();
   ext_.assign(n, ChannelExtremum{});
+  std::vector<std::string> units;
+  for (const ChannelInfo& c : info) {
+    const auto u = std::find(units.begin(), units.end(), c.unit);
+    unit_.push_back(static_cast<int>(u - units.begin()));
+    if (u == units.end()) units.push_back(c.unit);
+  }
+  scale_.assign(units.size(), 0.0);
   for (auto* v : {&v0_, &d0_, &v1_, &d1_, &tmp_}) v->assign(n, 0.0);
 }
 
@@ -74,6 +84,9 @@ void ChannelExtrema::step(double t0, double t1, const Eigen::VectorXd& y1, const
   channel_values(model_, ws1, y1, v1_.data());
   sample(t1, v1_.data());
   if (!(h > 0.0)) return;
+  for (size_t i = 0; i < ext_.size(); ++i)
+    if (ext_[i].seen)
+      scale_[unit_[i]] = std::max({scale_[unit_[i]], std::abs(ext_[i].min), std::abs(ext_[i].max)});
   const double eps = kSlopeFraction * h;
   // A window end inside the step: its value counts (an extremum over the window may sit there).
   for (const double edge : {from_, to_})
@@ -88,15 +101,17 @@ void ChannelExtrema::step(double t0, double t1, const Eigen::VectorXd& y1, const
   if (!probe_values(probe, t1 - eps, tmp_)) return;
   for (size_t i = 0; i < v1_.size(); ++i) d1_[i] = (v1_[i] - tmp_[i]) / eps;
   // A slope changing sign: a turning point inside the step, refined where it may matter.
+  const double rtol = resolution_;
   for (size_t i = 0; i < v1_.size(); ++i) {
     const double a = d0_[i], b = d1_[i];
     if (!(std::isfinite(a) && std::isfinite(b))) continue;
+    const double own = std::max(std::abs(ext_[i].min), std::abs(ext_[i].max));
     for (const double sign : {1.0, -1.0}) {
       if (!(sign * a > 0.0 && sign * b < 0.0)) continue;
       const double est = hermite_max(sign * v0_[i], sign * a, sign * v1_[i], sign * b, h);
       const double bulge = est - std::max(sign * v0_[i], sign * v1_[i]);
       const double best = sign > 0 ? ext_[i].max : -ext_[i].min;
-      if (est + bulge >= best)
+      if (est + bulge >= best && bulge > rtol * own && own > rtol * scale_[unit_[i]])
         refine(probe, static_cast<int>(i), sign, std::max(t0, from_), std::min(t1, to_),
                t1 <= to_ ? -sign * v1_[i] : std::numeric_limits<double>::quiet_NaN());
     }

@@ -26,8 +26,12 @@ struct ChannelExtremum {
 /// slope changes sign over the step has a turning point inside it, which Brent's method
 /// (golden-section and parabolic steps, Boost.Math's brent_find_minima) on the dense output
 /// locates (kRefineBits, at most kRefineIterations evaluations), unless a cubic Hermite estimate
-/// through the end values and slopes shows it cannot beat the extremum already found. Every workspace evaluated,
-/// refinement points included, updates every channel.
+/// through the end values and slopes shows it cannot beat the extremum already found, or that it
+/// lies below the integrator's resolution (rtol): it rises above the step's ends by at most rtol
+/// times the channel's largest magnitude so far, or that magnitude is at most rtol times the
+/// largest of any channel with the same unit (a channel zero in exact arithmetic, such as a
+/// constant-speed crank's angular acceleration). Searching there would refine integration error.
+/// Every workspace evaluated, refinement points included, updates every channel.
 class ChannelExtrema {
  public:
   /// Relative offset of the slope sample at a step's end (fraction of the step).
@@ -45,6 +49,9 @@ class ChannelExtrema {
   /// samples the end itself and refines inside the window only, so the extrema over the window
   /// are as exact as over a whole run.
   void set_window(double from, double to) { from_ = from, to_ = to; }
+  /// The relative resolution below which a turning point is not searched (default: the model's
+  /// rtol; 0 searches every one that may beat the extremum found so far).
+  void set_resolution(double relative) { resolution_ = relative; }
 
   /// A value of every channel at time t (an output or an event): updates the extrema only.
   void sample(double t, const double* values);
@@ -69,6 +76,9 @@ class ChannelExtrema {
 
   const Model& model_;
   std::vector<ChannelExtremum> ext_;
+  std::vector<int> unit_;        ///< per channel: its unit's index into scale_
+  std::vector<double> scale_;    ///< per unit: the largest |value| of its channels so far
+  double resolution_;            ///< relative; see set_resolution
   std::vector<double> v0_, d0_, v1_, d1_, tmp_;
   double t_last_ = 0.0;
   double from_ = -std::numeric_limits<double>::infinity();
