@@ -284,3 +284,46 @@ TEST(Extrema, TurningPointsBelowTheIntegratorsResolutionAreNotSearched) {
   // a sample's.
   EXPECT_GT(both.tracked.refinements(), 0);
 }
+
+TEST(Extrema, AStepObserverSeesTheWorkspaceOfTheStepsEnd) {
+  // The step hook hands observers the workspace at the step's end without evaluating it again
+  // where the integrator's last evaluation was there (DOPRI5's last stage), and evaluates it
+  // where not (a step cut at an event; CVODE). Either way every channel must be what a fresh
+  // evaluation at (t1, y) gives: on the Flores example, whose impacts cut steps, with both
+  // integrators.
+  class Check : public Observer {
+   public:
+    explicit Check(const Model& m)
+        : model(m), a(channel_info(m, Workspace(m)).size()), b(a.size()) {}
+    bool wants_steps() const override { return true; }
+    void output(double, const Eigen::VectorXd&, const Workspace&) override {}
+    void step(double, double, const Eigen::VectorXd& y, const Workspace& ws,
+              StepProbe& probe) override {
+      ++steps;
+      channel_values(model, ws, y, a.data());
+      ASSERT_TRUE(probe.at_end());
+      ASSERT_EQ(probe.state(), y);
+      channel_values(model, probe.workspace(), probe.state(), b.data());
+      for (size_t i = 0; i < a.size(); ++i)
+        if (a[i] != b[i] && !(std::isnan(a[i]) && std::isnan(b[i]))) ++differing;
+    }
+    const Model& model;
+    std::vector<double> a, b;
+    long steps = 0, differing = 0;
+  };
+  for (const char* integrator : {"dopri5", "bdf"}) {
+    SCOPED_TRACE(integrator);
+    const Model m = load_model_text(read_file(example_path("flores_slider_crank.yaml")),
+                                    "flores_slider_crank.yaml",
+                                    {"solver.end_time=0.012",
+                                     "solver.integrator=" + std::string(integrator)})
+                        .model;
+    Workspace ws(m);
+    Check check(m);
+    const RunResult r = simulate(m, ws, check);
+    ASSERT_TRUE(r.status.ok) << r.status.message;
+    EXPECT_GT(r.stats.events, 10);
+    EXPECT_GT(check.steps, 100);
+    EXPECT_EQ(check.differing, 0);
+  }
+}
