@@ -84,9 +84,6 @@ void ChannelExtrema::step(double t0, double t1, const Eigen::VectorXd& y1, const
   channel_values(model_, ws1, y1, v1_.data());
   sample(t1, v1_.data());
   if (!(h > 0.0)) return;
-  for (size_t i = 0; i < ext_.size(); ++i)
-    if (ext_[i].seen)
-      scale_[unit_[i]] = std::max({scale_[unit_[i]], std::abs(ext_[i].min), std::abs(ext_[i].max)});
   const double eps = kSlopeFraction * h;
   // A window end inside the step: its value counts (an extremum over the window may sit there).
   for (const double edge : {from_, to_})
@@ -100,8 +97,20 @@ void ChannelExtrema::step(double t0, double t1, const Eigen::VectorXd& y1, const
   // The left slope at t1.
   if (!probe_values(probe, t1 - eps, tmp_)) return;
   for (size_t i = 0; i < v1_.size(); ++i) d1_[i] = (v1_[i] - tmp_[i]) / eps;
-  // A slope changing sign: a turning point inside the step, refined where it may matter.
-  const double rtol = resolution_;
+  // A slope changing sign: a turning point inside the step, refined where it may matter. The
+  // units' largest magnitudes are brought up to date once per step, and only where needed.
+  bool scaled = false;
+  auto unit_scale = [&](int u) {
+    if (!scaled) {
+      for (size_t k = 0; k < ext_.size(); ++k)
+        if (ext_[k].seen)
+          scale_[unit_[k]] =
+              std::max({scale_[unit_[k]], std::abs(ext_[k].min), std::abs(ext_[k].max)});
+      scaled = true;
+    }
+    return scale_[u];
+  };
+  const double res = resolution_;
   for (size_t i = 0; i < v1_.size(); ++i) {
     const double a = d0_[i], b = d1_[i];
     if (!(std::isfinite(a) && std::isfinite(b))) continue;
@@ -111,7 +120,7 @@ void ChannelExtrema::step(double t0, double t1, const Eigen::VectorXd& y1, const
       const double est = hermite_max(sign * v0_[i], sign * a, sign * v1_[i], sign * b, h);
       const double bulge = est - std::max(sign * v0_[i], sign * v1_[i]);
       const double best = sign > 0 ? ext_[i].max : -ext_[i].min;
-      if (est + bulge >= best && bulge > rtol * own && own > rtol * scale_[unit_[i]])
+      if (est + bulge >= best && bulge > res * own && own > res * unit_scale(unit_[i]))
         refine(probe, static_cast<int>(i), sign, std::max(t0, from_), std::min(t1, to_),
                t1 <= to_ ? -sign * v1_[i] : std::numeric_limits<double>::quiet_NaN());
     }
