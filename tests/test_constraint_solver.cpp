@@ -123,6 +123,41 @@ TEST(ConstraintSolver, SparseAndDenseFactorisationsAgreeOnEveryExample) {
 }
 
 
+TEST(ConstraintSolver, PatternLeavesOutWhatIsZeroAtEveryConfiguration) {
+  // The Flores example at assembly: every marker lies on its body's x axis and every angle is 0,
+  // so the rotation entries of the revolute rows vanish there, but not elsewhere. By hand, the
+  // entries that are not identically 0: crank_pivot (crank to ground at crank.O) x row: crank x
+  // and φ, y row: crank y and φ (4); crank_rod: the same on crank and rod (8); slider_guide's
+  // distance row, slider.O at the slider's centre on a guide of fixed direction: slider y (1),
+  // its angle row: slider φ (1); the driver: crank φ (1). 15, where the bodies' whole blocks
+  // would be 33.
+  Model m = load_model_file(std::string(LASH_SOURCE_DIR) + "/examples/flores_slider_crank.yaml").model;
+  m.solver.end_time = 1e-4;
+  Workspace ws(m);
+  Compare c;
+  ASSERT_TRUE(simulate(m, ws, c).status.ok);
+  ASSERT_EQ(ws.solver->active.size(), 7u);
+  EXPECT_EQ(ws.solver->phi_col.size(), 15u);
+  // Those are all that is ever nonzero: Φ_q along the run (Compare's dense solve uses all of
+  // it) and at configurations far from the mechanism's.
+  EXPECT_LT(c.lambda, 1e-11);
+  const int nq = ws.nq;
+  Eigen::VectorXd y = Eigen::VectorXd::Zero(ws.ny);
+  for (int draw = 0; draw < 50; ++draw) {
+    for (int k = 0; k < nq; ++k) y[k] = std::sin(7.3 * draw + 1.9 * k) * 10.0;
+    constraint_residual(m, ws, 0.0, y.data());  // Φ and Φ_q at y, in ws
+    for (int a = 0; a < 7; ++a)
+      for (int k = 0; k < nq; ++k) {
+        if (ws.phi_q(ws.solver->active[a], k) == 0.0) continue;
+        bool in = false;
+        for (int e = ws.solver->phi_begin[a]; e < ws.solver->phi_begin[a + 1]; ++e)
+          in = in || ws.solver->phi_col[e] == k;
+        EXPECT_TRUE(in) << "row " << ws.solver->active[a] << ", coordinate " << k;
+      }
+  }
+}
+
+
 namespace {
 
 /// A parallelogram linkage under gravity: `cranks` unit cranks (mass m, inertia I about the

@@ -84,7 +84,8 @@ bool independent_on_block(const Eigen::MatrixXd& phi_q, const std::vector<int>& 
 
 /// The solver's rows, order and pattern; with `late`, every row is anchored to the last of its
 /// bodies in the order.
-static void build_solver(const Model& model, Workspace& ws, const Eigen::MatrixXd& phi_q, bool late) {
+static void build_solver(const Model& model, Workspace& ws, const Eigen::MatrixXd& phi_q,
+                         const JacobianPattern& pattern, bool late) {
   auto s = std::make_unique<ConstraintSolver>();
   const int nq = ws.nq, m = ws.m;
   const std::vector<RowOwner> owner = row_owners(model, ws);
@@ -230,20 +231,29 @@ static void build_solver(const Model& model, Workspace& ws, const Eigen::MatrixX
     for (int a : anchored[b]) s->pos[nq + a] = next++;
   }
 
+  // Each active row's entries: the coordinates of its bodies in Φ_q's pattern.
+  std::vector<std::vector<int>> row_cols(ma);
+  for (int a = 0; a < ma; ++a) {
+    const auto& rb = ws.row_bodies[s->active[a]];
+    for (int bi = 0; bi < 2; ++bi) {
+      const int b = rb[bi];
+      if (b < 0 || (bi == 1 && b == rb[0])) continue;
+      const BodyBlock& bl = ws.blocks[b];
+      for (int k = bl.offset; k < bl.offset + bl.size; ++k)
+        if (pattern(s->active[a], k)) row_cols[a].push_back(k);
+    }
+  }
+
   // Pattern of the upper triangle in that order: the diagonal, M's coupling (flexible links),
-  // and Φ_q's blocks.
+  // and Φ_q's.
   std::vector<Eigen::Triplet<double>> t;
   for (int v = 0; v < n; ++v) t.emplace_back(s->pos[v], s->pos[v], 1.0);
   for (const auto& e : ws.mass_coupling)
     t.emplace_back(std::min(s->pos[e.i], s->pos[e.j]), std::max(s->pos[e.i], s->pos[e.j]), 0.0);
   for (int a = 0; a < ma; ++a)
-    for (int b : ws.row_bodies[s->active[a]]) {
-      if (b < 0) continue;
-      const BodyBlock& bl = ws.blocks[b];
-      for (int k = bl.offset; k < bl.offset + bl.size; ++k) {
-        const int i = s->pos[k], j = s->pos[nq + a];
-        t.emplace_back(std::min(i, j), std::max(i, j), 0.0);
-      }
+    for (int k : row_cols[a]) {
+      const int i = s->pos[k], j = s->pos[nq + a];
+      t.emplace_back(std::min(i, j), std::max(i, j), 0.0);
     }
   s->k.resize(n, n);
   s->k.setFromTriplets(t.begin(), t.end());
@@ -258,15 +268,9 @@ static void build_solver(const Model& model, Workspace& ws, const Eigen::MatrixX
   for (int a = 0; a < ma; ++a) {
     s->slot_reg.push_back(slot(nq + a, nq + a));
     s->phi_begin.push_back(static_cast<int>(s->phi_col.size()));
-    const auto& rb = ws.row_bodies[s->active[a]];
-    for (int bi = 0; bi < 2; ++bi) {
-      const int b = rb[bi];
-      if (b < 0 || (bi == 1 && b == rb[0])) continue;
-      const BodyBlock& bl = ws.blocks[b];
-      for (int k = bl.offset; k < bl.offset + bl.size; ++k) {
-        s->phi_col.push_back(k);
-        s->phi_slot.push_back(slot(k, nq + a));
-      }
+    for (int k : row_cols[a]) {
+      s->phi_col.push_back(k);
+      s->phi_slot.push_back(slot(k, nq + a));
     }
   }
   s->phi_begin.push_back(static_cast<int>(s->phi_col.size()));
@@ -288,13 +292,13 @@ void FixedPatternLdlt::analyze(const SparseMatrix& upper) {
   const int n = static_cast<int>(upper.rows());
   col_begin_.assign(n + 1, 0);
   for (int j = 0; j < n; ++j) col_begin_[j + 1] = col_begin_[j] + analysis.counts()[j];
-  col_row_.assign(col_begin_[n], 0);
-  col_value_.assign(col_begin_[n], 0.0);
+  const int nnz = col_begin_[n];
+  col_row_.assign(nnz, 0);
+  col_of_.assign(nnz, 0);
   // Row k's pattern: every entry (i, k), i < k, of the upper triangle and its tree path up to
-  // k. Rows are visited in order, so column i's entries are stored in row order.
-  row_begin_.assign(1, 0);
-  row_col_.clear();
-  row_slot_.clear();
+  // k, ascending, with the slot of each L(k, i). Rows are visited in order, so column i's
+  // entries are stored in row order.
+  std::vector<std::vector<std::pair<int, int>>> row(n);  // (i, slot of L(k, i))
   std::vector<int> mark(n, -1), filled(n, 0), cols;
   for (int k = 0; k < n; ++k) {
     cols.clear();
@@ -304,65 +308,94 @@ void FixedPatternLdlt::analyze(const SparseMatrix& upper) {
         mark[i] = k;
         cols.push_back(i);
       }
-    std::sort(cols.begin(), cols.end());  // ascending: a topological order of the tree
+    std::sort(cols.begin(), cols.end());
     for (int i : cols) {
       const int slot = col_begin_[i] + filled[i]++;
       if (slot >= col_begin_[i + 1]) throw std::logic_error("FixedPatternLdlt: column count exceeded");
       col_row_[slot] = k;
-      row_col_.push_back(i);
-      row_slot_.push_back(slot);
+      col_of_[slot] = i;
+      row[k].emplace_back(i, slot);
     }
-    row_begin_.push_back(static_cast<int>(row_col_.size()));
   }
+  // Where each value of A is: the upper triangle's entry (i, j), i ≤ j, is in column j.
+  auto source = [&](int i, int j) {
+    for (SparseMatrix::InnerIterator it(upper, j); it; ++it)
+      if (it.index() == i) return static_cast<int>(&it.value() - upper.valuePtr());
+    return -1;
+  };
+  // The products of entry (j, i), j ≥ i: the k < i in both rows' patterns (merge, ascending).
+  source_.clear();
+  target_.clear();
+  pair_begin_.assign(1, 0);
+  pairs_.clear();
+  auto add_entry = [&](int j, int i, int target) {
+    source_.push_back(source(i, j));
+    target_.push_back(target);
+    auto a = row[j].begin(), b = row[i].begin();
+    while (a != row[j].end() && b != row[i].end() && a->first < i) {
+      if (a->first < b->first) {
+        ++a;
+      } else if (b->first < a->first) {
+        ++b;
+      } else {
+        pairs_.push_back({a->second, b->second});
+        ++a;
+        ++b;
+      }
+    }
+    pair_begin_.push_back(static_cast<int>(pairs_.size()));
+  };
+  for (int i = 0; i < n; ++i) {
+    add_entry(i, i, -1 - i);
+    for (int t = col_begin_[i]; t < col_begin_[i + 1]; ++t) add_entry(col_row_[t], i, t);
+  }
+  l_.assign(nnz, 0.0);
+  u_.assign(nnz, 0.0);
   d_.setZero(n);
   d_inverse_.setZero(n);
-  y_.setZero(n);
 }
 
 bool FixedPatternLdlt::factorize(const SparseMatrix& upper, const std::vector<signed char>& sign) {
-  const int n = static_cast<int>(upper.rows());
-  const int* ap = upper.outerIndexPtr();
-  const int* ai = upper.innerIndexPtr();
+  const int entries = static_cast<int>(source_.size());
   const double* ax = upper.valuePtr();
-  for (int k = 0; k < n; ++k) {
-    // Row k of L: the triangular solve L(0:k, 0:k) D l = A(0:k, k) over row k's pattern.
-    for (int p = ap[k]; p < ap[k + 1]; ++p) y_[ai[p]] = ax[p];
-    double d = y_[k];
-    y_[k] = 0.0;
-    for (int e = row_begin_[k]; e < row_begin_[k + 1]; ++e) {
-      const int i = row_col_[e], slot = row_slot_[e];
-      const double yi = y_[i];
-      y_[i] = 0.0;
-      for (int p = col_begin_[i]; p < slot; ++p) y_[col_row_[p]] -= col_value_[p] * yi;
-      const double l = yi * d_inverse_[i];
-      d -= l * yi;
-      col_value_[slot] = l;
+  const int* source = source_.data();
+  const int* target = target_.data();
+  const int* pair_begin = pair_begin_.data();
+  const Pair* pairs = pairs_.data();
+  double* l = l_.data();
+  double* u = u_.data();
+  double d_inverse = 0.0;  // of the current column's pivot
+  for (int e = 0; e < entries; ++e) {
+    double v = source[e] >= 0 ? ax[source[e]] : 0.0;
+    for (int p = pair_begin[e]; p < pair_begin[e + 1]; ++p) v -= l[pairs[p].l] * u[pairs[p].u];
+    const int t = target[e];
+    if (t >= 0) {
+      u[t] = v;
+      l[t] = v * d_inverse;
+    } else {
+      const int i = -1 - t;
+      d_[i] = v;
+      if (!(sign[i] * v > 0.0)) return false;
+      d_inverse = 1.0 / v;
+      d_inverse_[i] = d_inverse;
     }
-    d_[k] = d;
-    d_inverse_[k] = 1.0 / d;
-    // y is all 0 again (every entry touched is in row k's pattern, or k): a failed factorisation
-    // leaves nothing behind.
-    if (!(sign[k] * d > 0.0)) return false;
   }
   return true;
 }
 
 void FixedPatternLdlt::solve(Eigen::VectorXd& x) const {
-  const int n = static_cast<int>(d_.size());
-  for (int j = 0; j < n; ++j) {
-    const double xj = x[j];
-    for (int p = col_begin_[j]; p < col_begin_[j + 1]; ++p) x[col_row_[p]] -= col_value_[p] * xj;
-  }
-  for (int j = 0; j < n; ++j) x[j] *= d_inverse_[j];
-  for (int j = n - 1; j >= 0; --j) {
-    double v = x[j];
-    for (int p = col_begin_[j]; p < col_begin_[j + 1]; ++p) v -= col_value_[p] * x[col_row_[p]];
-    x[j] = v;
-  }
+  // L z = x column by column (each x[j] is final when column j's entries come), z ← D⁻¹z, then
+  // Lᵀ x = z backwards (each x[r] of column j's entries is final: its column came later).
+  const int n = static_cast<int>(d_.size()), nnz = static_cast<int>(l_.size());
+  double* v = x.data();
+  for (int p = 0; p < nnz; ++p) v[col_row_[p]] -= l_[p] * v[col_of_[p]];
+  for (int j = 0; j < n; ++j) v[j] *= d_inverse_[j];
+  for (int p = nnz - 1; p >= 0; --p) v[col_of_[p]] -= l_[p] * v[col_row_[p]];
 }
 
-void prepare_constraint_solver(const Model& model, Workspace& ws, const Eigen::MatrixXd& phi_q) {
-  build_solver(model, ws, phi_q, false);
+void prepare_constraint_solver(const Model& model, Workspace& ws, const Eigen::MatrixXd& phi_q,
+                               const JacobianPattern& pattern) {
+  build_solver(model, ws, phi_q, pattern, false);
   // Safety net: a row pivot near 0 at assembly means an anchoring to an earlier body left a
   // leading block nearly singular; then every row goes after all of its bodies (safe whenever
   // the rows are independent, at the price of more fill).
@@ -379,7 +412,7 @@ void prepare_constraint_solver(const Model& model, Workspace& ws, const Eigen::M
   for (int a = 0; a < ma && ok; ++a) ok = -s.ldlt.diagonal()[s.pos[nq + a]] > 1e-10 * s.w_diag[a];
   if (!ok) {
     const std::vector<std::string> warnings = ws.warnings;
-    build_solver(model, ws, phi_q, true);
+    build_solver(model, ws, phi_q, pattern, true);
     ws.warnings = warnings;
   }
 }

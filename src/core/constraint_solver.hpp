@@ -52,11 +52,17 @@ inline constexpr int kRegularisationSteps = 3;
 
 /// L D Lᵀ of a sparse symmetric matrix given by its upper triangle in elimination order, for
 /// many matrices of one pattern. The symbolic analysis is Eigen's SimplicialLDLT::analyzePattern
-/// (elimination tree, column counts of L); from it each row's pattern (the columns i < k with
-/// L(k,i) ≠ 0: the tree paths from column k's entries up to k) and where each entry of L is
-/// stored are found once. A factorisation is then the arithmetic of the up-looking algorithm
-/// Eigen's factorize runs, without walking the tree again each time (on the 16 × 16 system of
-/// the Flores example: about half the time of Eigen's factorize and solve, same flops).
+/// (elimination tree, column counts of L); from it the pattern of L is found once, and with it
+/// the arithmetic of the left-looking algorithm as a flat list: for each entry of L (and each
+/// pivot), where its value comes from in the matrix and the pairs (k, L(i,k)·D_k) it is
+/// reduced by,
+///
+///     D_i    = A_ii − Σ_k L(i,k) U(i,k),      U(i,k) = L(i,k) D_k,
+///     U(j,i) = A_ji − Σ_k L(j,k) U(i,k),      L(j,i) = U(j,i) / D_i   (j > i),
+///
+/// the sums over the columns k < i where both entries are in the pattern. A factorisation is then
+/// that list run once, with no tree walk, scatter or gather (the 16 × 16 system of the Flores
+/// example: 41 entries, 48 products, about 1 500 instructions per factorisation under callgrind).
 class FixedPatternLdlt {
  public:
   using SparseMatrix = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
@@ -70,10 +76,18 @@ class FixedPatternLdlt {
   const Eigen::VectorXd& diagonal() const { return d_; }  ///< D of L D Lᵀ
 
  private:
-  std::vector<int> col_begin_, col_row_;   ///< L's strict lower triangle by columns (CSC)
-  std::vector<double> col_value_;
-  std::vector<int> row_begin_, row_col_, row_slot_;  ///< per row k: columns i < k, slot of L(k,i)
-  Eigen::VectorXd d_, d_inverse_, y_;  ///< D, its inverse, the factorisation's work vector
+  std::vector<int> col_begin_, col_row_, col_of_;  ///< L's strict lower triangle by columns (CSC)
+  std::vector<double> l_, u_;  ///< L(j,i) and U(j,i) = L(j,i)·D_i, by slot
+  /// The list, in order (column by column: its pivot, then its entries): per entry e, the slot
+  /// of A's value in `upper` (−1: a fill-in, 0), what it computes (target_ ≥ 0: that slot of
+  /// L; −1 − i: pivot i) and its products [pair_begin_[e], pair_begin_[e+1]) of
+  /// l_[pair.l]·u_[pair.u].
+  struct Pair {
+    int l, u;
+  };
+  std::vector<int> source_, target_, pair_begin_;
+  std::vector<Pair> pairs_;
+  Eigen::VectorXd d_, d_inverse_;  ///< D and its inverse
 };
 
 /// The sparse solver of one workspace: pattern, elimination order and factorisation.
@@ -86,7 +100,7 @@ struct ConstraintSolver {
   std::vector<signed char> sign;  ///< per position: the pivot's sign, +1 (coordinate) or −1 (row)
   std::vector<int> slot_reg;    ///< per active row: its −ε entry in k.valuePtr()
   std::vector<int> phi_begin;   ///< per active row: its range in phi_col / phi_slot
-  std::vector<int> phi_col, phi_slot;  ///< Φ_q entries: coordinate and slot in k.valuePtr()
+  std::vector<int> phi_col, phi_slot;  ///< Φ_q's pattern: coordinate and slot in k.valuePtr()
   std::vector<double> w_diag;   ///< per active row: W_aa at assembly (M⁻¹ by its diagonal)
   /// Per active row: its base regularisation ε_a = kRegularisation · W_aa.
   std::vector<double> regularisation;
@@ -95,12 +109,17 @@ struct ConstraintSolver {
   long regularised = 0;         ///< solves that needed more than the base regularisation
 };
 
-/// Sets up ws's constraint solver from Φ_q (ws.m × ws.nq) at an assembled configuration:
-/// detects redundant rows (kept rows in the order of the model: joints, then drivers), warns
-/// about them in ws.warnings naming the joints they are redundant with, and computes the
-/// elimination order and the factorisation's pattern. Throws std::runtime_error if a driver's
-/// equation is redundant (its motion would be dropped).
-void prepare_constraint_solver(const Model& model, Workspace& ws, const Eigen::MatrixXd& phi_q);
+/// Where Φ_q can be nonzero (ws.m × ws.nq): `true` at the entries a row may write.
+using JacobianPattern = Eigen::Array<bool, Eigen::Dynamic, Eigen::Dynamic>;
+
+/// Sets up ws's constraint solver from Φ_q (ws.m × ws.nq) at an assembled configuration and
+/// the pattern of Φ_q (entries outside it must stay 0 at every configuration; the solver does not
+/// read them): detects redundant rows (kept rows in the order of the model: joints, then
+/// drivers), warns about them in ws.warnings naming the joints they are redundant with, and
+/// computes the elimination order and the factorisation's pattern. Throws std::runtime_error if
+/// a driver's equation is redundant (its motion would be dropped).
+void prepare_constraint_solver(const Model& model, Workspace& ws, const Eigen::MatrixXd& phi_q,
+                               const JacobianPattern& pattern);
 
 /// Solves the augmented system at the current ws.phi_q, ws.g (applied forces) and ws.rhs_m
 /// (γ_B): fills ws.qdd and ws.lambda (0 on dropped rows). Returns false if no regularisation up

@@ -5,6 +5,7 @@
 #include <Eigen/QR>
 #include <algorithm>
 #include <cmath>
+#include <random>
 #include <sstream>
 #include <stdexcept>
 
@@ -45,6 +46,37 @@ void build_constraints(const Model& model, Workspace& ws, double t, const double
   }
   for (size_t di = 0; di < model.drivers.size(); ++di)
     driver_constrain(model, ws, static_cast<int>(di), t, y, ws.row_of_driver[di], out);
+}
+
+/// Configurations drawn around the assembled one for Φ_q's pattern (jacobian_pattern).
+constexpr int kPatternProbes = 3;
+
+/// Where Φ_q can be nonzero: the entries nonzero at y (assembled) or at kPatternProbes
+/// configurations drawn around it, each coordinate moved by up to 1 + |q_k| (a fixed seed, so
+/// every run of a model gets the same pattern). Every entry is a smooth function of the
+/// configuration (sines and cosines of the angles, polynomials of the positions and modal
+/// amplitudes), so one that is not identically 0 is 0 at a drawn configuration only by a
+/// coincidence of probability 0; a coincidental 0 at assembly (a marker on a body's axis at
+/// angle 0) is caught by the draws. The solver then leaves out what is 0 at every configuration:
+/// a revolute row's coordinate across it, a driver's or an angle row's positions, a marker at a
+/// body's centre of mass (on the Flores example L has 25 entries instead of 38, and a factorisation 48 products instead of 84). Leaves ws.kin
+/// at y.
+JacobianPattern jacobian_pattern(const Model& model, Workspace& ws, double t, const double* y,
+                                 const Eigen::MatrixXd& phi_q) {
+  JacobianPattern pattern = phi_q.array() != 0.0;
+  Eigen::VectorXd probe = Eigen::Map<const Eigen::VectorXd>(y, ws.ny);
+  Eigen::VectorXd phi(ws.m);
+  Eigen::MatrixXd pq(ws.m, ws.nq);
+  std::mt19937 draw(20261126u);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  for (int p = 0; p < kPatternProbes; ++p) {
+    for (int k = 0; k < ws.nq; ++k) probe[k] = y[k] + unit(draw) * (1.0 + std::abs(y[k]));
+    update_kin(ws, probe.data());
+    build_constraints(model, ws, t, probe.data(), false, phi, pq, nullptr, nullptr);
+    pattern = pattern || (pq.array() != 0.0);
+  }
+  update_kin(ws, y);
+  return pattern;
 }
 
 /// The bodies' state as load expressions read it (`<body>.x` …), from ws.kin.
@@ -359,7 +391,8 @@ bool evaluate(const Model& model, Workspace& ws, double t, const double* y, doub
   ws.stabilization_power = 0.0;
   if (ws.m > 0) {
     build_constraints(model, ws, t, y, false, ws.phi, ws.phi_q, &ws.phi_dot, &ws.gamma);
-    if (!ws.solver) prepare_constraint_solver(model, ws, ws.phi_q);
+    if (!ws.solver)
+      prepare_constraint_solver(model, ws, ws.phi_q, jacobian_pattern(model, ws, t, y, ws.phi_q));
     const double a = model.solver.baumgarte_alpha, b = model.solver.baumgarte_beta;
     // γ_B = γ − 2αΦ̇ − β²Φ and Φ_q q̇, from the row structure (each row touches at most two
     // coordinate blocks).
@@ -443,7 +476,7 @@ std::string constraint_problem(const Model& model, Workspace& ws, double t,
   build_constraints(model, ws, t, y.data(), false, p, pq, &pd, nullptr);
   // Redundant joint equations are dropped (named in ws.warnings); a redundant driver throws.
   try {
-    prepare_constraint_solver(model, ws, pq);
+    prepare_constraint_solver(model, ws, pq, jacobian_pattern(model, ws, t, y.data(), pq));
   } catch (const std::runtime_error& e) {
     return e.what();
   }
