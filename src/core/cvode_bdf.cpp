@@ -5,6 +5,7 @@
 #include <sunmatrix/sunmatrix_dense.h>
 
 #include <cstdio>
+#include <cstdlib>
 #include <exception>
 #include <stdexcept>
 #include <string>
@@ -22,11 +23,19 @@ namespace {
 /// without end.
 constexpr long kMaxRhsFailures = 60;
 
+/// CVODE's name of a return flag ("CV_TOO_MUCH_WORK"). CVodeGetReturnFlagName returns a string
+/// it allocated with malloc, which the caller frees.
+std::string flag_name(int flag) {
+  char* name = CVodeGetReturnFlagName(flag);
+  std::string s = name ? name : "flag " + std::to_string(flag);
+  std::free(name);
+  return s;
+}
+
 /// Every SUNDIALS call goes through here: a negative flag becomes an exception naming the call.
 void check(int flag, const char* call) {
   if (flag < 0)
-    throw std::runtime_error(std::string("SUNDIALS ") + call + " failed: " +
-                             CVodeGetReturnFlagName(flag));
+    throw std::runtime_error(std::string("SUNDIALS ") + call + " failed: " + flag_name(flag));
 }
 template <class T>
 T* check_ptr(T* p, const char* call) {
@@ -118,7 +127,7 @@ class CvodeBdf final : public Integrator {
         return {Advance::failure, failed_at_, msg};
       }
       return {Advance::failure, t_cur,
-              std::string(CVodeGetReturnFlagName(flag)) +
+              flag_name(flag) +
                   (last_error_.empty() ? "" : ": " + last_error_)};
     }
     t_ = t_ret;
