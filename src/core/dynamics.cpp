@@ -345,7 +345,6 @@ Workspace::Workspace(const Model& model) {
   gamma.resize(m);
   rhs_m.resize(m);
   lambda = Eigen::VectorXd::Zero(m);
-  rate_m.resize(m);
   phi_q = Eigen::MatrixXd::Zero(m, nq);
 }
 
@@ -394,23 +393,18 @@ bool evaluate(const Model& model, Workspace& ws, double t, const double* y, doub
     if (!ws.solver)
       prepare_constraint_solver(model, ws, ws.phi_q, jacobian_pattern(model, ws, t, y, ws.phi_q));
     const double a = model.solver.baumgarte_alpha, b = model.solver.baumgarte_beta;
-    // γ_B = γ − 2αΦ̇ − β²Φ and Φ_q q̇, from the row structure (each row touches at most two
-    // coordinate blocks).
-    const Eigen::Map<const Eigen::VectorXd> qd(y + nq, nq);
-    for (int i = 0; i < ws.m; ++i) {
-      double rate = 0.0;
-      for (int bi : ws.row_bodies[i]) {
-        if (bi < 0) continue;
-        for_block(ws.blocks[bi], [&](int k) { rate += ws.phi_q(i, k) * qd[k]; });
-      }
-      ws.rhs_m[i] = ws.gamma[i] - 2.0 * a * ws.phi_dot[i] - b * b * ws.phi[i];
-      ws.rate_m[i] = rate;
-    }
+    // γ_B = γ − 2αΦ̇ − β²Φ.
+    ws.rhs_m = ws.gamma - (2.0 * a) * ws.phi_dot - (b * b) * ws.phi;
     if (!solve_constraints(ws)) return false;
     // Power of the constraint forces λ·Φ_q q̇ = λ·(Φ̇ − Φ_t), split into the drivers' input
     // −λΦ_t (Φ_t = 0 for every other row) and the work on the drift, λ·Φ̇: Baumgarte's, which
-    // would be 0 on the exact constraint manifold.
-    for (int r : ws.row_of_driver) ws.input_power += ws.lambda[r] * (ws.rate_m[r] - ws.phi_dot[r]);
+    // would be 0 on the exact constraint manifold. A driver's Φ_q q̇ from its row's blocks.
+    for (int r : ws.row_of_driver) {
+      double rate = 0.0;
+      for (int bi : ws.row_bodies[r])
+        if (bi >= 0) for_block(ws.blocks[bi], [&](int k) { rate += ws.phi_q(r, k) * y[nq + k]; });
+      ws.input_power += ws.lambda[r] * (rate - ws.phi_dot[r]);
+    }
     ws.stabilization_power = ws.lambda.dot(ws.phi_dot);
     ws.constraint_violation = ws.phi.cwiseAbs().maxCoeff();
   } else {

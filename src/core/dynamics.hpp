@@ -101,8 +101,8 @@ struct Workspace {
   std::unique_ptr<Eigen::LLT<Eigen::MatrixXd>> mass_factor;
 
   // Work arrays (sized once). g: applied generalised forces (no constraint forces); rhs_m: the
-  // stabilised constraint accelerations γ_B = γ − 2αΦ̇ − β²Φ; rate_m: Φ_q q̇.
-  Eigen::VectorXd g, phi, phi_dot, gamma, rhs_m, rate_m, lambda, qdd;
+  // stabilised constraint accelerations γ_B = γ − 2αΦ̇ − β²Φ.
+  Eigen::VectorXd g, phi, phi_dot, gamma, rhs_m, lambda, qdd;
   Eigen::MatrixXd phi_q;
   /// The sparse constraint solver, set up at assembly (initial_state, constraint_problem) or at
   /// the first evaluation; redundant rows are dropped there and named in `warnings`.
