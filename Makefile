@@ -30,7 +30,7 @@ test: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
 
 # The whole suite once more under AddressSanitizer + UndefinedBehaviorSanitizer (tests/lsan.supp:
-# leaks of libraries' static initialisers, not Lash's; the build needs it too, since listing the
+# leaks inside libraries, not Lash's: CLN's static initialiser, GiNaC's parser on a division by 0; the build needs it too, since listing the
 # tests runs each test program). Optimised (-O2 -g): at -O0, GiNaC's parser (libginac 1.8.6)
 # crashes inside the library (function::eval) for every driver expression under ASan, which the
 # optimised build and the plain builds do not.

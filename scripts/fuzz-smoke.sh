@@ -36,7 +36,8 @@ fuzzer="$build/fuzz/fuzz_model_loader"
 # Sanitizers: stop at the first report, with a stack; libFuzzer then saves the input.
 export ASAN_OPTIONS="${ASAN_OPTIONS:+$ASAN_OPTIONS:}abort_on_error=1:detect_leaks=1:symbolize=1"
 export UBSAN_OPTIONS="${UBSAN_OPTIONS:+$UBSAN_OPTIONS:}print_stacktrace=1:halt_on_error=1:symbolize=1"
-# tests/lsan.supp: CLN's one allocation at load time that it never frees.
+# tests/lsan.supp: CLN's one allocation at load time that it never frees, and GiNaC's parser's leak
+# when a formula divides by zero.
 export LSAN_OPTIONS="${LSAN_OPTIONS:+$LSAN_OPTIONS:}suppressions=$root/tests/lsan.supp"
 
 crashes="$build/crashes"
