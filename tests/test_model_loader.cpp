@@ -87,6 +87,15 @@ TEST(ModelLoader, NegativeClearanceNamesJointLineAndValue) {
   EXPECT_EQ(d[0].str(), "model.yaml:24:16: joint 'gudgeon': clearance must be >= 0, got -0.001");
 }
 
+TEST(ModelLoader, ClearanceLostInTheJournalRadiusIsRejected) {
+  // 8.5e63 m + 0.5 mm is 8.5e63 m in double precision: no gap left to fly in.
+  const auto d = problems(with("journal_radius: 9.5e-3", "journal_radius: 8.5e63"));
+  ASSERT_EQ(d.size(), 1u);
+  EXPECT_NE(d[0].str().find("joint 'gudgeon': clearance 0.0005 m is lost in journal radius"),
+            std::string::npos)
+      << d[0].str();
+}
+
 TEST(ModelLoader, UnknownKeySuggestsTheNearestOne) {
   const auto d = problems(with("clearance: 0.5e-3", "clearence: 0.5e-3"));
   ASSERT_GE(d.size(), 1u);

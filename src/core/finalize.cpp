@@ -147,6 +147,9 @@ class Checker {
       if (!(c.clearance > 0)) error(el, "clearance must be > 0 m");
       if (!(c.journal_radius > 0)) error(el, "journal_radius must be > 0 m");
       c.bearing_radius = c.journal_radius + c.clearance;
+      if (!(c.bearing_radius > c.journal_radius))
+        error(el, "clearance is lost in the journal radius (journal_radius + clearance rounds to "
+                  "journal_radius)");
       if (c.contact.stiffness == 0.0 && c.journal_material && c.bearing_material)
         c.contact.stiffness = hertz_cylinder_stiffness(
             c.bearing_radius, c.journal_radius, c.bearing_material->youngs_modulus,

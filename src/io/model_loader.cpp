@@ -569,6 +569,14 @@ class Loader {
                    " m");
       return;
     }
+    if (!(cl.journal_radius + cl.clearance > cl.journal_radius)) {
+      r_.error(s.node(), s.element(),
+               "clearance " + fmt_num(cl.clearance) + " m is lost in journal radius " +
+                   fmt_num(cl.journal_radius) +
+                   " m (their sum rounds to the journal radius in double precision); give the "
+                   "radii in metres, e.g. journal_radius: 9.5e-3");
+      return;
+    }
     // Normal law.
     const std::string law = c.text("normal_law").value_or("lankarani_nikravesh");
     if (auto l = normal_law_from_name(law)) {
