@@ -290,9 +290,9 @@ void FixedPatternLdlt::analyze(const SparseMatrix& upper) {
   } analysis;
   analysis.analyzePattern(upper);
   const int n = static_cast<int>(upper.rows());
-  col_begin_.assign(n + 1, 0);
-  for (int j = 0; j < n; ++j) col_begin_[j + 1] = col_begin_[j] + analysis.counts()[j];
-  const int nnz = col_begin_[n];
+  std::vector<int> col_begin(n + 1, 0);  // column j of L: entries [col_begin[j], col_begin[j+1])
+  for (int j = 0; j < n; ++j) col_begin[j + 1] = col_begin[j] + analysis.counts()[j];
+  const int nnz = col_begin[n];
   col_row_.assign(nnz, 0);
   col_of_.assign(nnz, 0);
   // Row k's pattern: every entry (i, k), i < k, of the upper triangle and its tree path up to
@@ -310,8 +310,8 @@ void FixedPatternLdlt::analyze(const SparseMatrix& upper) {
       }
     std::sort(cols.begin(), cols.end());
     for (int i : cols) {
-      const int slot = col_begin_[i] + filled[i]++;
-      if (slot >= col_begin_[i + 1]) throw std::logic_error("FixedPatternLdlt: column count exceeded");
+      const int slot = col_begin[i] + filled[i]++;
+      if (slot >= col_begin[i + 1]) throw std::logic_error("FixedPatternLdlt: column count exceeded");
       col_row_[slot] = k;
       col_of_[slot] = i;
       row[k].emplace_back(i, slot);
@@ -347,7 +347,7 @@ void FixedPatternLdlt::analyze(const SparseMatrix& upper) {
   };
   for (int i = 0; i < n; ++i) {
     add_entry(i, i, -1 - i);
-    for (int t = col_begin_[i]; t < col_begin_[i + 1]; ++t) add_entry(col_row_[t], i, t);
+    for (int t = col_begin[i]; t < col_begin[i + 1]; ++t) add_entry(col_row_[t], i, t);
   }
   l_.assign(nnz, 0.0);
   u_.assign(nnz, 0.0);

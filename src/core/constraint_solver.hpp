@@ -78,7 +78,8 @@ class FixedPatternLdlt {
   const Eigen::VectorXd& diagonal() const { return d_; }  ///< D of L D Lᵀ
 
  private:
-  std::vector<int> col_begin_, col_row_, col_of_;  ///< L's strict lower triangle by columns (CSC)
+  /// Per entry of L's strict lower triangle, column by column: its row and its column.
+  std::vector<int> col_row_, col_of_;
   std::vector<double> l_, u_;  ///< L(j,i) and U(j,i) = L(j,i)·D_i, by slot
   /// The list, in order (column by column: its pivot, then its entries): per entry e, the slot
   /// of A's value in `upper` (−1: a fill-in, 0), what it computes (target_ ≥ 0: that slot of

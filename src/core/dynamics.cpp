@@ -59,8 +59,8 @@ constexpr int kPatternProbes = 3;
 /// coincidence of probability 0; a coincidental 0 at assembly (a marker on a body's axis at
 /// angle 0) is caught by the draws. The solver then leaves out what is 0 at every configuration:
 /// a revolute row's coordinate across it, a driver's or an angle row's positions, a marker at a
-/// body's centre of mass (on the Flores example L has 25 entries instead of 38, and a factorisation 48 products instead of 84). Leaves ws.kin
-/// at y.
+/// body's centre of mass (on the Flores example L has 25 entries instead of 38, and a
+/// factorisation 48 products instead of 84). Leaves ws.kin at y.
 JacobianPattern jacobian_pattern(const Model& model, Workspace& ws, double t, const double* y,
                                  const Eigen::MatrixXd& phi_q) {
   JacobianPattern pattern = phi_q.array() != 0.0;
@@ -402,7 +402,8 @@ bool evaluate(const Model& model, Workspace& ws, double t, const double* y, doub
     for (int r : ws.row_of_driver) {
       double rate = 0.0;
       for (int bi : ws.row_bodies[r])
-        if (bi >= 0) for_block(ws.blocks[bi], [&](int k) { rate += ws.phi_q(r, k) * y[nq + k]; });
+        if (bi >= 0)
+          for_block(ws.blocks[bi], [&](int k) { rate += ws.phi_q(r, k) * y[nq + k]; });
       ws.input_power += ws.lambda[r] * (rate - ws.phi_dot[r]);
     }
     ws.stabilization_power = ws.lambda.dot(ws.phi_dot);
