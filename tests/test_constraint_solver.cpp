@@ -138,6 +138,10 @@ TEST(ConstraintSolver, PatternLeavesOutWhatIsZeroAtEveryConfiguration) {
   ASSERT_TRUE(simulate(m, ws, c).status.ok);
   ASSERT_EQ(ws.solver->active.size(), 7u);
   EXPECT_EQ(ws.solver->phi_col.size(), 15u);
+  // Of those, the ones that change with the configuration: the rotation entries of the two
+  // revolute joints (2 on the crank for crank_pivot, 2 on the crank and 2 on the rod for
+  // crank_rod); the positions' ±1, the guide's fixed direction and the driver's 1 are constant.
+  EXPECT_EQ(ws.solver->phi_varying.size(), 6u);
   // Those are all that is ever nonzero: Φ_q along the run (Compare's dense solve uses all of
   // it) and at configurations far from the mechanism's.
   EXPECT_LT(c.lambda, 1e-11);

@@ -240,7 +240,7 @@ static void build_solver(const Model& model, Workspace& ws, const Eigen::MatrixX
       if (b < 0 || (bi == 1 && b == rb[0])) continue;
       const BodyBlock& bl = ws.blocks[b];
       for (int k = bl.offset; k < bl.offset + bl.size; ++k)
-        if (pattern(s->active[a], k)) row_cols[a].push_back(k);
+        if (pattern.nonzero(s->active[a], k)) row_cols[a].push_back(k);
     }
   }
 
@@ -265,24 +265,35 @@ static void build_solver(const Model& model, Workspace& ws, const Eigen::MatrixX
   s->k.coeffs().setZero();
   for (int k = 0; k < nq; ++k) s->k.valuePtr()[slot(k, k)] = ws.mass_diag[k];
   for (const auto& e : ws.mass_coupling) s->k.valuePtr()[slot(e.i, e.j)] = e.value;
+  // Fixed values: M, the fill, Φ_q's fixed entries (written here once); not the −ε entries,
+  // which grow when a factorisation is repeated.
+  std::vector<bool> fixed(s->k.nonZeros(), true);
   for (int a = 0; a < ma; ++a) {
+    const int row = s->active[a];
     s->slot_reg.push_back(slot(nq + a, nq + a));
+    fixed[s->slot_reg.back()] = false;
     s->phi_begin.push_back(static_cast<int>(s->phi_col.size()));
     for (int k : row_cols[a]) {
+      const int sl = slot(k, nq + a);
       s->phi_col.push_back(k);
-      s->phi_slot.push_back(slot(k, nq + a));
+      s->phi_slot.push_back(sl);
+      s->k.valuePtr()[sl] = phi_q(row, k);
+      if (!pattern.fixed(row, k)) {
+        s->phi_varying.push_back({row, k, sl});
+        fixed[sl] = false;
+      }
     }
   }
   s->phi_begin.push_back(static_cast<int>(s->phi_col.size()));
   s->sign.assign(n, 1);
   for (int a = 0; a < ma; ++a) s->sign[s->pos[nq + a]] = -1;
-  s->ldlt.analyze(s->k);
+  s->ldlt.analyze(s->k, fixed);
   s->x.resize(n);
   ws.lambda.setZero();
   ws.solver = std::move(s);
 }
 
-void FixedPatternLdlt::analyze(const SparseMatrix& upper) {
+void FixedPatternLdlt::analyze(const SparseMatrix& upper, const std::vector<bool>& fixed) {
   // Eigen's symbolic analysis: the elimination tree and the column counts of L.
   struct Analysis : Eigen::SimplicialLDLT<SparseMatrix, Eigen::Upper, Eigen::NaturalOrdering<int>> {
     const Eigen::VectorXi& parent() const { return m_parent; }
@@ -349,6 +360,25 @@ void FixedPatternLdlt::analyze(const SparseMatrix& upper) {
     add_entry(i, i, -1 - i);
     for (int t = col_begin[i]; t < col_begin[i + 1]; ++t) add_entry(col_row_[t], i, t);
   }
+  // The entries to compute again: those reading a value that is not fixed, directly or through
+  // a product or (an entry of L) its pivot. U(j,i) is fixed when its value and products are;
+  // L(j,i) when U(j,i) and D_i are.
+  std::vector<bool> u_fixed(nnz), l_fixed(nnz), d_fixed(n);
+  varying_.clear();
+  for (int e = 0; e < static_cast<int>(target_.size()); ++e) {
+    bool f = !fixed.empty() && (source_[e] < 0 || fixed[source_[e]]);
+    for (int p = pair_begin_[e]; f && p < pair_begin_[e + 1]; ++p)
+      f = l_fixed[pairs_[p].l] && u_fixed[pairs_[p].u];
+    const int t = target_[e];
+    if (t >= 0) {
+      u_fixed[t] = f;
+      l_fixed[t] = f = f && d_fixed[col_of_[t]];
+    } else {
+      d_fixed[-1 - t] = f;
+    }
+    if (!f) varying_.push_back(e);
+  }
+  factored_ = false;
   l_.assign(nnz, 0.0);
   u_.assign(nnz, 0.0);
   d_.setZero(n);
@@ -356,30 +386,39 @@ void FixedPatternLdlt::analyze(const SparseMatrix& upper) {
 }
 
 bool FixedPatternLdlt::factorize(const SparseMatrix& upper, const std::vector<signed char>& sign) {
-  const int entries = static_cast<int>(source_.size());
   const double* ax = upper.valuePtr();
   const int* source = source_.data();
   const int* target = target_.data();
   const int* pair_begin = pair_begin_.data();
+  const int* col_of = col_of_.data();
   const Pair* pairs = pairs_.data();
   double* l = l_.data();
   double* u = u_.data();
-  double d_inverse = 0.0;  // of the current column's pivot
-  for (int e = 0; e < entries; ++e) {
+  double* d_inverse = d_inverse_.data();
+  // Entry e of the list; false at a pivot of the wrong sign.
+  auto compute = [&](int e) {
     double v = source[e] >= 0 ? ax[source[e]] : 0.0;
     for (int p = pair_begin[e]; p < pair_begin[e + 1]; ++p) v -= l[pairs[p].l] * u[pairs[p].u];
     const int t = target[e];
     if (t >= 0) {
       u[t] = v;
-      l[t] = v * d_inverse;
-    } else {
-      const int i = -1 - t;
-      d_[i] = v;
-      if (!(sign[i] * v > 0.0)) return false;
-      d_inverse = 1.0 / v;
-      d_inverse_[i] = d_inverse;
+      l[t] = v * d_inverse[col_of[t]];  // the column's pivot came before it in the list
+      return true;
     }
+    const int i = -1 - t;
+    d_[i] = v;
+    if (!(sign[i] * v > 0.0)) return false;
+    d_inverse[i] = 1.0 / v;
+    return true;
+  };
+  if (!factored_) {
+    const int entries = static_cast<int>(source_.size());
+    for (int e = 0; e < entries; ++e)
+      if (!compute(e)) return false;
+    return factored_ = true;
   }
+  for (int e : varying_)
+    if (!compute(e)) return false;
   return true;
 }
 
@@ -421,11 +460,8 @@ bool solve_constraints(Workspace& ws) {
   ConstraintSolver& s = *ws.solver;
   const int nq = ws.nq, ma = static_cast<int>(s.active.size());
   double* v = s.k.valuePtr();
-  for (int a = 0; a < ma; ++a) {
-    const int row = s.active[a];
-    for (int e = s.phi_begin[a]; e < s.phi_begin[a + 1]; ++e) v[s.phi_slot[e]] = ws.phi_q(row, s.phi_col[e]);
-    s.x[s.pos[nq + a]] = ws.rhs_m[row];
-  }
+  for (const ConstraintSolver::Entry& e : s.phi_varying) v[e.slot] = ws.phi_q(e.row, e.col);
+  for (int a = 0; a < ma; ++a) s.x[s.pos[nq + a]] = ws.rhs_m[s.active[a]];
   for (int k = 0; k < nq; ++k) s.x[s.pos[k]] = ws.g[k];
   // Factor; a pivot of the wrong sign (the quasi-definite inertia lost to round-off: W singular
   // to working precision) repeats it with a larger ε.

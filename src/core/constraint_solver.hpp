@@ -62,16 +62,25 @@ inline constexpr int kRegularisationSteps = 3;
 ///
 /// the sums over the columns k < i where both entries are in the pattern. A factorisation is then
 /// that list run once, with no tree walk, scatter or gather (the 16 × 16 system of the Flores
-/// example: 41 entries, 48 products, about 1 500 instructions per factorisation under callgrind).
+/// example: 41 entries, 48 products).
+///
+/// Values of A that never change (M, most of Φ_q's entries: the ±1 of a revolute row's
+/// positions, a driver's 1) can be named at the analysis. An entry of the list whose value and
+/// products all come from such values, and whose pivot does, is the same at every factorisation:
+/// it is computed by the first successful one only, and later ones run the rest of the list (on
+/// the Flores example 23 of the 41 entries, with all 48 products: what is left out is M's
+/// pivots and the entries of L in M's columns whose Φ_q entry is constant).
 /// The list holds two indices per product, i.e. 8 bytes per multiply-add of the factorisation:
 /// at most 405 products (3.2 KB) among the examples (erkaya_compliant_beam.yaml, 65 unknowns).
 class FixedPatternLdlt {
  public:
   using SparseMatrix = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
-  /// The pattern of `upper` (its values are not read).
-  void analyze(const SparseMatrix& upper);
+  /// The pattern of `upper` (its values are not read). `fixed`, if not empty, holds per value
+  /// of `upper` (its slot in valuePtr()) whether it is the same in every matrix factorised.
+  void analyze(const SparseMatrix& upper, const std::vector<bool>& fixed = {});
   /// Factors `upper` (the analysed pattern). Stops and returns false at the first pivot d_k
-  /// whose sign is not sign[k] (+1 or −1), before dividing by it.
+  /// whose sign is not sign[k] (+1 or −1), before dividing by it. After one successful call,
+  /// the part of the factorisation that depends only on fixed values is not computed again.
   bool factorize(const SparseMatrix& upper, const std::vector<signed char>& sign);
   /// x ← A⁻¹x, in elimination order.
   void solve(Eigen::VectorXd& x) const;
@@ -90,6 +99,9 @@ class FixedPatternLdlt {
   };
   std::vector<int> source_, target_, pair_begin_;
   std::vector<Pair> pairs_;
+  /// The entries (indices into the list, in order) that depend on a value not fixed.
+  std::vector<int> varying_;
+  bool factored_ = false;  ///< a factorisation succeeded: the fixed entries hold their values
   Eigen::VectorXd d_, d_inverse_;  ///< D and its inverse
 };
 
@@ -104,6 +116,12 @@ struct ConstraintSolver {
   std::vector<int> slot_reg;    ///< per active row: its −ε entry in k.valuePtr()
   std::vector<int> phi_begin;   ///< per active row: its range in phi_col / phi_slot
   std::vector<int> phi_col, phi_slot;  ///< Φ_q's pattern: coordinate and slot in k.valuePtr()
+  /// The entries of Φ_q's pattern whose value changes with the configuration: (row of Φ_q,
+  /// coordinate, slot in k.valuePtr()). The others keep the value written at the analysis.
+  struct Entry {
+    int row, col, slot;
+  };
+  std::vector<Entry> phi_varying;
   std::vector<double> w_diag;   ///< per active row: W_aa at assembly (M⁻¹ by its diagonal)
   /// Per active row: its base regularisation ε_a = kRegularisation · W_aa.
   std::vector<double> regularisation;
@@ -112,12 +130,15 @@ struct ConstraintSolver {
   long regularised = 0;         ///< solves that needed more than the base regularisation
 };
 
-/// Where Φ_q can be nonzero (ws.m × ws.nq): `true` at the entries a row may write.
-using JacobianPattern = Eigen::Array<bool, Eigen::Dynamic, Eigen::Dynamic>;
+/// Φ_q's pattern (ws.m × ws.nq): `nonzero` is true at the entries a row may write, `fixed` at
+/// those of them whose value is the same at every configuration.
+struct JacobianPattern {
+  Eigen::Array<bool, Eigen::Dynamic, Eigen::Dynamic> nonzero, fixed;
+};
 
 /// Sets up ws's constraint solver from Φ_q (ws.m × ws.nq) at an assembled configuration and
-/// the pattern of Φ_q (entries outside it must stay 0 at every configuration; the solver does not
-/// read them): detects redundant rows (kept rows in the order of the model: joints, then
+/// the pattern of Φ_q (entries outside `nonzero` must stay 0 at every configuration and the
+/// `fixed` ones keep their value at phi_q: the solver reads neither again): detects redundant rows (kept rows in the order of the model: joints, then
 /// drivers), warns about them in ws.warnings naming the joints they are redundant with, and
 /// computes the elimination order and the factorisation's pattern. Throws std::runtime_error if
 /// a driver's equation is redundant (its motion would be dropped).

@@ -60,10 +60,15 @@ constexpr int kPatternProbes = 3;
 /// angle 0) is caught by the draws. The solver then leaves out what is 0 at every configuration:
 /// a revolute row's coordinate across it, a driver's or an angle row's positions, a marker at a
 /// body's centre of mass (on the Flores example L has 25 entries instead of 38, and a
-/// factorisation 48 products instead of 84). Leaves ws.kin at y.
+/// factorisation 48 products instead of 84). `fixed`: the entries with the same value at y and
+/// at every drawn configuration, i.e. constant (the ±1 of a revolute row's positions, a
+/// driver's 1, a guide's direction on the ground); a smooth entry that is not constant takes
+/// four equal values only by the same coincidence. The solver writes them once. Leaves ws.kin
+/// at y.
 JacobianPattern jacobian_pattern(const Model& model, Workspace& ws, double t, const double* y,
                                  const Eigen::MatrixXd& phi_q) {
-  JacobianPattern pattern = phi_q.array() != 0.0;
+  JacobianPattern pattern{phi_q.array() != 0.0,
+                          Eigen::Array<bool, Eigen::Dynamic, Eigen::Dynamic>::Ones(ws.m, ws.nq)};
   Eigen::VectorXd probe = Eigen::Map<const Eigen::VectorXd>(y, ws.ny);
   Eigen::VectorXd phi(ws.m);
   Eigen::MatrixXd pq(ws.m, ws.nq);
@@ -73,7 +78,8 @@ JacobianPattern jacobian_pattern(const Model& model, Workspace& ws, double t, co
     for (int k = 0; k < ws.nq; ++k) probe[k] = y[k] + unit(draw) * (1.0 + std::abs(y[k]));
     update_kin(ws, probe.data());
     build_constraints(model, ws, t, probe.data(), false, phi, pq, nullptr, nullptr);
-    pattern = pattern || (pq.array() != 0.0);
+    pattern.nonzero = pattern.nonzero || (pq.array() != 0.0);
+    pattern.fixed = pattern.fixed && (pq.array() == phi_q.array());
   }
   update_kin(ws, y);
   return pattern;

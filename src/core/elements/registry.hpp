@@ -54,10 +54,10 @@ class ChannelSink {
 };
 
 /// Constraint rows being written: Φ, Φ_q and optionally Φ̇ and γ (Φ_q q̈ = γ). A row writes only
-/// into the coordinate blocks of its (at most two) bodies, and which entries of Φ_q are nonzero
-/// may depend on the configuration but not on time: the solver's pattern is what is nonzero at
-/// assembly or at configurations drawn around it, at the assembly's time (jacobian_pattern in
-/// dynamics.cpp), and entries outside it are not read.
+/// into the coordinate blocks of its (at most two) bodies, and Φ_q depends on the configuration
+/// but not on time: the solver's pattern is what is nonzero at assembly or at configurations
+/// drawn around it, at the assembly's time (jacobian_pattern in dynamics.cpp); entries outside
+/// it are not read, and entries with one value at all of those configurations are read once.
 struct ConstraintOut {
   Eigen::VectorXd& phi;
   Eigen::MatrixXd& phi_q;
