@@ -516,6 +516,10 @@ TEST(Cli, ASignalStopsTheRunAndKeepsSummaryAndState) {
   EXPECT_FALSE(fs::exists(dir / "summary.json")) << "a stale summary beside new rows";
   EXPECT_FALSE(fs::exists(dir / "final_state.json"));
   expect_whole_rows(dir / "timeseries.csv", true);
+  // The events follow the series to disk (each time a block of rows goes out), not only at the
+  // end: the contacts before the kill are there (the first is at t = 0.28 ms).
+  expect_whole_rows(dir / "events.csv", true);
+  EXPECT_GE(line_count(dir / "events.csv"), 2u) << "the events were lost with the kill";
   fs::remove_all(dir);
 }
 
@@ -534,8 +538,15 @@ TEST(Cli, AWriteErrorStopsTheRunWithExitThreeAndWholeRows) {
   EXPECT_LT(summary["status"]["time"].get<double>(), 0.1);
   expect_whole_rows(dir / "timeseries.csv");
   expect_whole_rows(dir / "events.csv");
+  EXPECT_GE(line_count(dir / "events.csv"), 2u) << "the events before the failure were lost";
   EXPECT_EQ(summary["integrator"]["outputs"].get<long>() + 1,
             static_cast<long>(line_count(dir / "timeseries.csv")));
+  // `lash analyze` refuses the folder and says why, without suggesting --from (a run stopped
+  // by a write error leaves no final state).
+  const Result an = run_lash("analyze " + dir.string() + " --no-lyapunov");
+  EXPECT_EQ(an.code, 2) << an.out;
+  EXPECT_NE(an.out.find("could not be written"), std::string::npos) << an.out;
+  EXPECT_EQ(an.out.find("--from"), std::string::npos) << an.out;
   // An output folder that cannot be made (a character device): exit 3, named.
   const Result dev = run_lash("run " + example() + " -q -o /dev/full");
   EXPECT_EQ(dev.code, 3) << dev.out;

@@ -205,6 +205,70 @@ TEST(RunFolder, ACutRowIsNamedWithItsLine) {
   fs::remove_all(dir);
 }
 
+TEST(RunFolder, NonFiniteTimesAndFilesThatAreNotRegularAreRefused) {
+  const fs::path dir = temp_dir("tampered");
+  lash::AnalysisOptions o;
+  o.lyapunov = false;
+  o.ideal_twin = false;
+  run_into(dir, {"solver.end_time=0.003"}, o);
+  const std::string csv = lash::test::read_file((dir / "timeseries.csv").string());
+  const std::string events = lash::test::read_file((dir / "events.csv").string());
+  ASSERT_NE(events.find("onset"), std::string::npos);
+  auto expect_refused = [&](const std::string& text) {
+    try {
+      from_folder(dir, o);
+      ADD_FAILURE() << "no error, expected " << text;
+    } catch (const lash::RunFolderError& e) {
+      EXPECT_NE(std::string(e.what()).find(text), std::string::npos) << e.what();
+    }
+  };
+  // nan and inf in the time column of either file (parsed as numbers, so the ordering checks
+  // alone let them through).
+  for (const std::string bad : {"nan", "inf"}) {
+    std::string c = csv;
+    const size_t row3 = c.find('\n', c.find('\n', c.find('\n') + 1) + 1) + 1;
+    c.replace(row3, c.find(',', row3) - row3, bad);
+    std::ofstream(dir / "timeseries.csv") << c;
+    expect_refused("timeseries.csv:4:1: time " + bad + " is not a finite number");
+    std::ofstream(dir / "timeseries.csv") << csv;
+    std::string e = events;
+    const size_t row2 = e.find('\n') + 1;
+    e.replace(row2, e.find(',', row2) - row2, bad);
+    std::ofstream(dir / "events.csv") << e;
+    expect_refused("events.csv:2:1: time '" + bad + "' is not a finite number");
+    std::ofstream(dir / "events.csv") << events;
+  }
+  // A link to /dev/zero would be read for ever: refused at once (ctest's time-out would end a
+  // hang).
+  for (const char* name : {"events.csv", "timeseries.csv"}) {
+    fs::remove(dir / name);
+    fs::create_symlink("/dev/zero", dir / name);
+    expect_refused(std::string(name) + ": not a regular file");
+    fs::remove(dir / name);
+    std::ofstream(dir / name) << (std::string(name) == "events.csv" ? events : csv);
+  }
+  EXPECT_NO_THROW(from_folder(dir, o));
+  fs::remove_all(dir);
+}
+
+TEST(RunFolder, EventsCsvHoldsTheMissedCrossingsThatSummaryCounts) {
+  // At a loose tolerance the integrator misses crossings; they are corrected at a step's end
+  // and written to events.csv like the others (integrator.missed_events). The folder must read.
+  const fs::path dir = temp_dir("missed");
+  lash::AnalysisOptions o;
+  o.lyapunov = false;
+  o.ideal_twin = false;
+  const lash::RunAnalysis made = run_into(
+      dir, {"solver.rtol=2e-2", "solver.atol=1e-6", "drivers.crank.speed_rpm=3000"}, o);
+  ASSERT_TRUE(made.result.status.ok) << made.result.status.message;
+  ASSERT_GT(made.result.missed_events, 0) << "the case no longer misses a crossing";
+  const lash::LoadedModel m = lash::load_model_file((dir / "model_resolved.yaml").string());
+  const lash::RecordedRun run = lash::read_run_folder(dir.string(), m.model);
+  EXPECT_EQ(static_cast<long>(run.events.size()),
+            made.result.stats.events + made.result.missed_events);
+  fs::remove_all(dir);
+}
+
 TEST(RunFolder, SectionsBetweenOutputsAgreeWithThoseTheIntegratorLocated) {
   // Output intervals that do not divide the period (T = 12 ms): every section is interpolated
   // through four outputs, and kept only when the estimated error is below a tenth of the point

@@ -1,6 +1,7 @@
 // lash: the command-line front end. `lash run MODEL -o OUT` simulates; `lash check MODEL`
 // validates. Exit codes: 0 success, 1 numerical failure, 2 bad model or options, 3 I/O error
 // (results could not be written), 130 interrupted by a signal.
+#include <cmath>
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 #include <signal.h>
@@ -219,7 +220,16 @@ int main(int argc, char** argv) {
     sub->add_option("--period", period,
                     "Period of the motion, s: sections, crank angle and exponent for a model whose "
                     "driver is an expression (default: a constant-speed driver's, else the "
-                    "driver's mean speed over the run's last half)");
+                    "driver's mean speed over the run's last half)")
+        ->check(CLI::Validator(
+            [](std::string& v) {
+              char* end = nullptr;
+              const double x = std::strtod(v.c_str(), &end);
+              return end != v.c_str() && *end == '\0' && x > 0.0 && std::isfinite(x)
+                         ? std::string()
+                         : "expected a period > 0 s, got '" + v + "'";
+            },
+            "SECONDS"));
 
   auto* check = app.add_subcommand("check", "Validate a model: list every problem with file:line:column");
   check->add_option("model", model_path, "Model file (YAML)")->required()->check(CLI::ExistingFile);
@@ -406,6 +416,11 @@ int main(int argc, char** argv) {
           fmt::print(" {:.6g} Hz ({:.4g})", peaks[k].second, peaks[k].first);
         fmt::print("\n");
       }
+      for (const auto& name : fft_channels)
+        if (!an["spectra"].contains(name))
+          fmt::print("spectrum {}: none (fewer than 16 outputs after the transient: lower "
+                     "--discard or run longer; or the channel is constant to 1e-9 of its "
+                     "magnitude)\n", name);
       if (an["lyapunov"].is_object() && an["lyapunov"]["exponent"].is_null() &&
           !an["lyapunov"]["message"].get<std::string>().empty())
         fmt::print("Lyapunov exponents not computed: {}\n",

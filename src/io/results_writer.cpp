@@ -68,6 +68,18 @@ void ResultsWriter::write_rows(RowFile& file, std::string_view rows) {
   }
 }
 
+void ResultsWriter::flush_events_with_series() {
+  const long long out = h5_ ? h5_->rows_written() : ts_.rows_written();
+  if (out == series_rows_out_ || !ev_.is_open()) return;
+  series_rows_out_ = out;
+  try {
+    ev_.flush();
+  } catch (const IoError& e) {
+    if (write_error_.empty()) write_error_ = e.what();
+    ev_.abandon();
+  }
+}
+
 void ResultsWriter::write_series_row(double t) {
   if (h5_) {
     if (!h5_->is_open()) return;  // failed earlier
@@ -101,6 +113,7 @@ void ResultsWriter::output(double t, const Eigen::VectorXd& y, const Workspace& 
   if (!write_error_.empty()) return;  // the run stops at this output
   channel_values(model_, ws, y, values_.data());
   write_series_row(t);
+  flush_events_with_series();
   // Peaks of every channel, selected for the time series or not (summary.json), exact between
   // outputs (core/extrema.hpp).
   extrema_.sample(t, values_.data());

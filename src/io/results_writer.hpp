@@ -69,6 +69,10 @@ class ResultsWriter : public Observer {
   };
   void append_number(double v);  ///< %.9g into row_
   void write_rows(RowFile& file, std::string_view rows);  ///< records the first error
+  /// After the time series has written a block out: the events buffered so far too, so that a
+  /// killed run or a full disk leaves both files up to about the same time.
+  void flush_events_with_series();
+  long long series_rows_out_ = 0;  ///< the series' rows on disk when the events last followed
   void write_series_row(double t);  ///< the selected values_ to timeseries.csv or .h5
 
   const Model& model_;

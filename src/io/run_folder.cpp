@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <charconv>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -13,6 +14,7 @@
 #include <limits>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <sys/stat.h>
 
 #include "io/files.hpp"
 #include "io/state_file.hpp"
@@ -50,6 +52,10 @@ std::vector<std::string> split(const std::string& line) {
 
 /// Lines of a file (counting '\n') and whether its last byte ends a line; throws IoError.
 std::pair<long long, bool> count_lines(const std::string& path) {
+  // A link to /dev/zero or a FIFO would be read for ever: only a regular file is a run's file.
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) throw IoError(path, std::string("cannot be opened: ") + std::strerror(errno));
+  if (!S_ISREG(st.st_mode)) damaged(path + ": not a regular file (a run writes a text file there)");
   std::FILE* f = std::fopen(path.c_str(), "rb");
   if (!f) throw IoError(path, std::string("cannot be opened: ") + std::strerror(errno));
   std::vector<char> buf(1 << 20);
@@ -112,6 +118,7 @@ struct CsvRows {
     if (col != width)
       damaged(where + ": " + std::to_string(col) + " fields, expected " + std::to_string(width) +
               " (time and one per channel of the header): the row is cut");
+    if (!std::isfinite(t)) damaged(where + ":1: time " + s.substr(0, s.find(',')) + " is not a finite number");
     if (!(t > t_last)) damaged(where + ": time " + s.substr(0, s.find(',')) + " does not follow the row before");
     t_last = t;
     return true;
@@ -181,11 +188,15 @@ RecordedRun read_run_folder(const std::string& dir, const Model& model) {
     damaged(summary_path + ": damaged (" + e.what() + "); run the model again");
   }
   const RunStatus& status = run.result.status;
-  if (status.outcome == RunOutcome::interrupted || status.outcome == RunOutcome::write_error)
-    damaged(summary_path + ": the run did not complete (status.outcome " +
-            outcome_name(status.outcome) + " at t = " + fmt_g(status.t) +
-            " s), so its results cover part of the run only; continue it with `lash run "
-            "--from` or run the model again");
+  if (status.outcome == RunOutcome::interrupted)
+    damaged(summary_path + ": the run did not complete (status.outcome interrupted at t = " +
+            fmt_g(status.t) + " s), so its results cover part of the run only; continue it with "
+            "`lash run --from` or run the model again");
+  if (status.outcome == RunOutcome::write_error)
+    damaged(summary_path + ": the run stopped when its results could not be written "
+            "(status.outcome write_error at t = " + fmt_g(status.t) + " s: " + status.message +
+            "), so they cover part of the run only; make room (or fix the folder) and run the "
+            "model again");
   const json& output = member(sum, summary_path, "output");
   long long rows = 0;
   std::string file;
@@ -234,23 +245,29 @@ RecordedRun read_run_folder(const std::string& dir, const Model& model) {
       const auto f = split(line);
       if (f.size() != 4) damaged(where + ": " + std::to_string(f.size()) + " fields, expected 4 (time,joint,event,velocity)");
       RecordedEvent e;
-      if (!parse_number(f[0].data(), f[0].data() + f[0].size(), e.t))
-        damaged(where + ":1: '" + f[0] + "' is not a number");
+      if (!parse_number(f[0].data(), f[0].data() + f[0].size(), e.t) || !std::isfinite(e.t))
+        damaged(where + ":1: time '" + f[0] + "' is not a finite number");
       const auto it = std::find(joints.begin(), joints.end(), f[1]);
       if (it == joints.end()) damaged(where + ": '" + f[1] + "' is not a clearance joint of the model");
       e.joint = static_cast<int>(it - joints.begin());
       if (f[2] != "onset" && f[2] != "separation")
         damaged(where + ": event '" + f[2] + "', expected onset or separation");
       e.onset = f[2] == "onset";
-      if (!parse_number(f[3].data(), f[3].data() + f[3].size(), e.velocity))
-        damaged(where + ": velocity '" + f[3] + "' is not a number");
+      if (!parse_number(f[3].data(), f[3].data() + f[3].size(), e.velocity) ||
+          !std::isfinite(e.velocity))
+        damaged(where + ": velocity '" + f[3] + "' is not a finite number");
       if (!run.events.empty() && e.t < run.events.back().t)
         damaged(where + ": time " + f[0] + " is before the row above");
       run.events.push_back(e);
     }
-    if (n != run.result.stats.events)
+    // The rows: the events the integrator located and the crossings it missed, corrected
+    // at the end of a step (summary.json integrator.missed_events).
+    const long long expected = run.result.stats.events + run.result.missed_events;
+    if (n != expected)
       damaged(events_path + ": " + std::to_string(n) + " events, summary.json counts " +
-              std::to_string(run.result.stats.events) + ": cut or edited after the run");
+              std::to_string(expected) + " (integrator.events " +
+              std::to_string(run.result.stats.events) + " and missed_events " +
+              std::to_string(run.result.missed_events) + "): cut or edited after the run");
     run.read.push_back("contact events: events.csv (" + std::to_string(n) + ")");
   }
 

@@ -957,6 +957,10 @@ RunAnalysis analyze_samples(const Model& model, const AnalysisOptions& o, Plan& 
   double broadband = std::nan("");
   for (size_t i = 0; i < sa.fft_index.size(); ++i) {
     if (sa.fft_data[i].size() < 16) continue;
+    // A channel constant to round-off (a constant-speed crank's ω) has only noise to show: no
+    // spectrum, and no broadband share for the verdict.
+    const auto [lo, hi] = std::minmax_element(sa.fft_data[i].begin(), sa.fft_data[i].end());
+    if (!(*hi - *lo > 1e-9 * std::max(std::abs(*lo), std::abs(*hi)))) continue;
     const Spectrum spec = amplitude_spectrum(sa.fft_data[i], s.output_interval);
     if (i == 0 && p.period > 0) off_harmonic = non_harmonic_peaks(spec, 1.0 / p.period);
     if (i == 0) broadband = broadband_share(spec);
