@@ -198,7 +198,7 @@ TEST(StudyFile, ProblemsAreLocatedInTheStudyFile) {
                 .find("unknown key 'scal', did you mean 'scale'?"),
             std::string::npos);
   const std::string typo = problems("parameters:\n  drivers.crank.sped_rpm: {values: [1000]}\n");
-  EXPECT_NE(typo.find("driver 'crank': unknown key 'sped_rpm', did you mean 'speed_rpm'? (value set with --set)"),
+  EXPECT_NE(typo.find("driver 'crank': unknown key 'sped_rpm', did you mean 'speed_rpm'? (a value the study s.yaml sets)"),
             std::string::npos) << typo;
   const std::string parent = problems("parameters:\n  drivers.crank2.speed_rpm: {values: [1000]}\n");
   EXPECT_NE(parent.find("s.yaml:4:3: 'drivers.crank2.speed_rpm': no 'drivers.crank2' in the model, did you mean 'crank'? (in run 0)"),
@@ -567,4 +567,127 @@ TEST(SweepCli, UnderAnMpiLauncherWithoutLashMpiBesideItIsRefused) {
   EXPECT_NE(r.out.find("no lash-mpi beside this lash"), std::string::npos) << r.out;
   EXPECT_FALSE(fs::exists(dir / "out" / "study.db"));
   fs::remove_all(dir);
+}
+
+namespace {
+/// The study header of the regression tests below: Flores, 0.024 s (2 periods at 5000 rpm).
+const std::string kShort =
+    "set: {solver.end_time: 0.024, solver.output_interval: 1.0e-4}\ntransient: {periods: 1}\n";
+std::string study_problems(const std::string& body) {
+  try {
+    from_text(body);
+  } catch (const ModelError& e) {
+    std::string all;
+    for (const auto& d : e.diagnostics()) all += d.str() + "\n";
+    return all;
+  }
+  return "no error";
+}
+}  // namespace
+
+TEST(StudyFile, TwoParametersSettingOnePathAreRefusedWithBothPlaces) {
+  // A parameter and a case of another parameter setting the same path: the row would name one
+  // level and the model run with the other's value, whichever comes later. Refused, both ways.
+  const std::string a = study_problems(
+      kShort + "parameters:\n  drivers.crank.speed_rpm: {values: [3000, 5000]}\n"
+               "  variant: {cases: {slow: {drivers.crank.speed_rpm: 3000}, plain: {joints.rod_slider.restitution: 0.9}}}\n");
+  EXPECT_NE(a.find("s.yaml:7:28: 'drivers.crank.speed_rpm' is set by case 'slow' of parameter 'variant' and by "
+                   "parameter 'drivers.crank.speed_rpm' (line 6, column 3)"),
+            std::string::npos) << a;
+  const std::string b = study_problems(
+      kShort + "parameters:\n  variant: {cases: {slow: {drivers.crank.speed_rpm: 3000}, plain: {}}}\n"
+               "  drivers.crank.speed_rpm: {values: [3000, 5000]}\n");
+  EXPECT_NE(b.find("s.yaml:7:3: 'drivers.crank.speed_rpm' is set by parameter 'drivers.crank.speed_rpm' and by "
+                   "case 'slow' of parameter 'variant' (line 6, column 28)"),
+            std::string::npos) << b;
+  // Two case parameters, and a path inside another's value.
+  const std::string c = study_problems(
+      kShort + "parameters:\n  v1: {cases: {a: {joints.rod_slider.clearance: 1.0e-4}, b: {}}}\n"
+               "  v2: {cases: {c: {joints.rod_slider: {clearance: 2.0e-4}}, d: {}}}\n");
+  EXPECT_NE(c.find("'joints.rod_slider' is set by case 'c' of parameter 'v2' and 'joints.rod_slider.clearance' "
+                   "by case 'a' of parameter 'v1' (line 6, column 20)"),
+            std::string::npos) << c;
+  // `set` is every run's base: a case may override it, and its row names the case.
+  const StudySpec spec = from_text(
+      kShort + "parameters:\n  variant: {cases: {slow: {solver.end_time: 0.03}, plain: {}}}\n");
+  EXPECT_EQ(study_runs(spec)[0].overrides.back(), "solver.end_time=0.03");
+}
+
+TEST(StudyFile, ACaseWithAPathTheModelLacksIsRefusedBeforeAnyRun) {
+  const std::string a = study_problems(
+      kShort + "parameters:\n  variant: {cases: {a: {joints.nope.clearance: 0}, b: {drivers.crank.speed_rpm: 3000}}}\n");
+  EXPECT_NE(a.find("s.yaml:6:25: 'joints.nope.clearance': no 'joints.nope' in the model"),
+            std::string::npos) << a;
+  EXPECT_EQ(a.find("--set"), std::string::npos) << a;
+  // The same in the second case, after a first that loads.
+  const std::string b = study_problems(
+      kShort + "parameters:\n  variant: {cases: {b: {drivers.crank.speed_rpm: 3000}, a: {joints.nope.clearance: 0}}}\n");
+  EXPECT_NE(b.find("s.yaml:6:61: 'joints.nope.clearance': no 'joints.nope' in the model"), std::string::npos) << b;
+  // A case whose value makes no model in any of its runs.
+  const std::string c = study_problems(
+      kShort + "parameters:\n  variant: {cases: {b: {drivers.crank.speed_rpm: 3000}, a: {drivers.crank.speed_rpm: fast}}}\n");
+  EXPECT_NE(c.find("s.yaml:6:57: parameter 'variant': case 'a' makes no valid model"), std::string::npos) << c;
+  EXPECT_NE(c.find("(a value the study s.yaml sets"), std::string::npos) << c;
+  EXPECT_EQ(c.find("--set"), std::string::npos) << c;
+}
+
+TEST(StudyRun, AValueErrorOfARunNamesTheStudyNotSet) {
+  // A level bad in one run only is that run's error; its message points into the study.
+  const StudySpec spec = from_text(kShort + "parameters:\n  drivers.crank.speed_rpm: {values: [5000, fast]}\n");
+  const RunRecord bad = run_study_point(spec, study_runs(spec)[1]);
+  EXPECT_EQ(bad.status, "error");
+  EXPECT_EQ(bad.message.find("--set"), std::string::npos) << bad.message;
+  EXPECT_NE(bad.message.find("(a value the study s.yaml sets)"), std::string::npos) << bad.message;
+}
+
+TEST(StudyRun, TransientTimeIsHonouredWithAConstantSpeedDriver) {
+  // 0.01 s of 0.024 s at 5000 rpm (period 0.012 s): the default 5 periods would not fit.
+  const StudySpec spec = from_text(
+      "set: {solver.end_time: 0.024, solver.output_interval: 1.0e-4}\ntransient: {time: 0.01}\n"
+      "parameters:\n  drivers.crank.speed_rpm: {values: [5000]}\nkeep: {sections: [rod_slider.ex]}\n");
+  const RunRecord r = run_study_point(spec, study_runs(spec)[0]);
+  EXPECT_EQ(r.status, "completed") << r.message;
+  // Sections at 0.012 and 0.024 s, both after 0.01 s.
+  ASSERT_EQ(r.section_times.size(), 2u);
+  EXPECT_NEAR(r.section_times[0], 0.012, 1e-12);
+  EXPECT_NE(study_problems("transient: {periods: 1, time: 0.01}\nparameters:\n  drivers.crank.speed_rpm: {values: [5000]}\n")
+                .find("transient: give periods (crank periods) or time (seconds), not both"),
+            std::string::npos);
+}
+
+TEST(StudyRun, ARunWhoseModelLacksAKeptChannelKeepsTheRest) {
+  // Clearance 0 makes rod_slider ideal: no Fn, no ex. Both orders load; that run completes with
+  // its other results and says which channels it lacks; the other run keeps them.
+  for (const std::string levels : {"[0, 1.0e-4]", "[1.0e-4, 0]"}) {
+    const StudySpec spec = from_text(kShort + "parameters:\n  joints.rod_slider.clearance: {values: " + levels +
+                                     "}\nkeep: {channels: [rod_slider.Fn, slider.ax], sections: [rod_slider.ex]}\n");
+    for (const auto& run : study_runs(spec)) {
+      const RunRecord r = run_study_point(spec, run);
+      EXPECT_EQ(r.status, "completed") << levels << " " << r.message;
+      std::map<std::string, double> m(r.metrics.begin(), r.metrics.end());
+      EXPECT_TRUE(m.count("slider.ax.peak")) << levels;
+      if (run.numbers[0] == 0) {
+        EXPECT_EQ(r.message, "not in this run's model, not kept: rod_slider.Fn, rod_slider.ex");
+        EXPECT_FALSE(m.count("rod_slider.Fn.peak"));
+        EXPECT_TRUE(r.section_channels.empty());
+        EXPECT_TRUE(r.section_values.empty() || r.section_values[0].empty());
+      } else {
+        EXPECT_TRUE(m.count("rod_slider.Fn.peak")) << levels;
+        EXPECT_EQ(r.section_channels, std::vector<std::string>{"rod_slider.ex"});
+      }
+    }
+  }
+  // A channel in no run's model is still refused.
+  EXPECT_NE(study_problems(kShort + "parameters:\n  joints.rod_slider.clearance: {values: [0, 1.0e-4]}\n"
+                                    "keep: {channels: [rod_slider.Fnn]}\n")
+                .find("keep: no channel 'rod_slider.Fnn' in the model"),
+            std::string::npos);
+}
+
+TEST(StudyFile, ContinuationLevelsThatStopOrReverseTheDriverAreRefused) {
+  const std::string a = study_problems(
+      kShort + "parameters:\n  drivers.crank.speed_rpm: {values: [3000, 0, -3000]}\ncontinuation: up\n");
+  EXPECT_NE(a.find("s.yaml:6:3: continuation: level '0' of 'drivers.crank.speed_rpm' gives no turning constant-speed rotary driver"),
+            std::string::npos) << a;
+  EXPECT_NE(a.find("level '-3000' of 'drivers.crank.speed_rpm' turns the driver the other way"), std::string::npos) << a;
 }

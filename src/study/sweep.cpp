@@ -93,6 +93,28 @@ std::string override_text(const YAML::Node& n) {
   return e.c_str();
 }
 
+/// A model's problems as a study's: an override's ("--set a.b") point at the key of the study
+/// file that sets that path, and a value the study set is said to come from the study.
+Diagnostics study_diagnostics(const std::vector<Diagnostic>& in, const StudySpec& spec) {
+  Diagnostics out;
+  for (auto d : in) {
+    if (d.file.rfind("--set", 0) == 0) {
+      const std::string path = d.file.size() > 6 ? d.file.substr(6) : "";
+      d.file = spec.file;
+      d.line = d.column = 0;
+      if (const auto m = spec.path_marks.find(path); m != spec.path_marks.end())
+        d.line = m->second.first, d.column = m->second.second;
+      if (!path.empty()) d.message = "'" + path + "': " + d.message;
+    }
+    const std::string tail = " (value set with --set)";
+    if (d.message.size() > tail.size() &&
+        d.message.compare(d.message.size() - tail.size(), tail.size(), tail) == 0)
+      d.message.replace(d.message.size() - tail.size(), tail.size(), " (a value the study " + spec.file + " sets)");
+    out.push_back(std::move(d));
+  }
+  return out;
+}
+
 constexpr int kMaxRuns = 1000000;
 
 void read_parameter(Reader& r, const YAML::Node& key, const YAML::Node& v, StudySpec& spec,
@@ -203,6 +225,23 @@ void read_parameter(Reader& r, const YAML::Node& key, const YAML::Node& v, Study
   spec.parameters.push_back(std::move(p));
 }
 
+/// The node of case `name` of the cases parameter `parameter` (null when absent).
+YAML::Node case_node(const YAML::Node& params, const std::string& parameter, const std::string& name) {
+  for (const auto& kv : params)
+    if (kv.first.as<std::string>("") == parameter && kv.second.IsMap() && kv.second["cases"].IsMap())
+      for (const auto& c : kv.second["cases"])
+        if (c.first.as<std::string>("") == name) return c.second;
+  return YAML::Node();
+}
+/// The key (the case's name) of that case, for messages.
+YAML::Node case_key(const YAML::Node& params, const std::string& parameter, const std::string& name) {
+  for (const auto& kv : params)
+    if (kv.first.as<std::string>("") == parameter && kv.second.IsMap() && kv.second["cases"].IsMap())
+      for (const auto& c : kv.second["cases"])
+        if (c.first.as<std::string>("") == name) return c.first;
+  return params;
+}
+
 /// A fixed 64-bit generator (splitmix64): the same sequence everywhere.
 struct SplitMix {
   unsigned long long s;
@@ -289,6 +328,55 @@ StudySpec load_study_text(const std::string& text, const std::string& file,
                                                         : "given twice (names are compared ignoring case)"));
     }
   }
+  // Where each model path is set: `set` gives every run's base, which a parameter or a case may
+  // override (docs/studies.md). Two parameters must not set one path (nor one a part of the
+  // other's): the run's row would name one level and the model hold the other's value.
+  if (const YAML::Node set = root["set"]; set && set.IsMap())
+    for (const auto& kv : set)
+      spec.path_marks[kv.first.as<std::string>("")] = {kv.first.Mark().line + 1, kv.first.Mark().column + 1};
+  {
+    struct Setter {
+      std::string path, who;
+      YAML::Node key;
+      size_t parameter;
+    };
+    std::vector<Setter> setters;
+    for (size_t j = 0; j < spec.parameters.size() && j < params.size(); ++j) {
+      const StudyParameter& p = spec.parameters[j];
+      if (p.case_overrides.empty()) {
+        for (const auto& kv : params)
+          if (kv.first.as<std::string>("") == p.name)
+            setters.push_back({p.name, "parameter '" + p.name + "'", kv.first, j});
+        continue;
+      }
+      for (size_t k = 0; k < p.values.size(); ++k) {
+        const YAML::Node c = case_node(params, p.name, p.values[k]);
+        if (!c.IsMap()) continue;
+        for (const auto& o : c)
+          setters.push_back({o.first.as<std::string>(""),
+                             "case '" + p.values[k] + "' of parameter '" + p.name + "'", o.first, j});
+      }
+    }
+    auto overlap = [](const std::string& a, const std::string& b) {
+      const std::string& s = a.size() <= b.size() ? a : b;
+      const std::string& l = a.size() <= b.size() ? b : a;
+      return l.compare(0, s.size(), s) == 0 && (l.size() == s.size() || l[s.size()] == '.');
+    };
+    for (size_t b = 0; b < setters.size(); ++b)
+      for (size_t a = 0; a < b; ++a)
+        if (setters[a].parameter != setters[b].parameter && overlap(setters[a].path, setters[b].path)) {
+          const YAML::Mark m = setters[a].key.Mark();
+          r.error(setters[b].key,
+                  "'" + setters[b].path + "' is set by " + setters[b].who + " and " +
+                      (setters[a].path == setters[b].path ? "" : "'" + setters[a].path + "' ") + "by " +
+                      setters[a].who + " (line " + std::to_string(m.line + 1) + ", column " +
+                      std::to_string(m.column + 1) + "); a run's row would name one and the model "
+                      "hold the other's value: set each model path in one parameter only");
+          break;
+        }
+    for (const auto& st : setters)
+      spec.path_marks[st.path] = {st.key.Mark().line + 1, st.key.Mark().column + 1};
+  }
   if (const YAML::Node c = root["combine"]) {
     spec.combine = c.as<std::string>("");
     if (spec.combine != "cross" && spec.combine != "zip")
@@ -343,6 +431,8 @@ StudySpec load_study_text(const std::string& text, const std::string& file,
     r.error(t, "transient: expected {periods: N} or {time: S}");
   } else if (t) {
     r.keys(t, {"periods", "time"}, "transient");
+    if (t["periods"] && t["time"])
+      r.error(t, "transient: give periods (crank periods) or time (seconds), not both");
     long n = 0;
     if (t["periods"] && r.integer(t["periods"], "transient: periods", 0, 1000000, n))
       spec.discard_periods = static_cast<int>(n);
@@ -382,47 +472,77 @@ StudySpec load_study_text(const std::string& text, const std::string& file,
                                            std::to_string(kMaxRuns) + " in one study"}});
 
   // The study must make at least one model: the first runs are loaded until one is, so a typo in
-  // a path fails now rather than in every run (a value that is bad in some runs only is recorded
-  // as that run's error). The channels it keeps must exist in that model.
+  // a path fails now rather than in every run. Every level of every listed parameter (each case
+  // too) is loaded once more in the first run that has it: a path the model lacks is refused
+  // wherever it is, a case none of whose first runs loads is refused, and the kept channels must
+  // exist in at least one of these models (a run whose model lacks one keeps the rest).
   const auto runs = study_runs(spec);
-  std::map<std::string, YAML::Mark> override_marks;  // override path → its key in the study file
-  if (const YAML::Node set = root["set"]; set && set.IsMap())
-    for (const auto& kv : set) override_marks.emplace(kv.first.as<std::string>(""), kv.first.Mark());
-  for (const auto& kv : params) {
-    override_marks.emplace(kv.first.as<std::string>(""), kv.first.Mark());
-    const YAML::Node cases = kv.second.IsMap() ? kv.second["cases"] : YAML::Node();
-    if (cases && cases.IsMap())
-      for (const auto& c : cases)
-        if (c.second.IsMap())
-          for (const auto& o : c.second) override_marks.emplace(o.first.as<std::string>(""), o.first.Mark());
-  }
-  std::optional<ModelError> first_error;
-  std::optional<LoadedModel> lm;
-  for (size_t i = 0; i < runs.size() && i < 100 && !lm; ++i) {
+  std::map<size_t, std::optional<LoadedModel>> loaded;  // run index → its model, if it loads
+  std::map<size_t, std::vector<Diagnostic>> load_errors;
+  auto load = [&](size_t i) -> bool {
+    if (loaded.count(i)) return loaded[i].has_value();
     try {
-      lm = load_model_text(spec.model_texts.at(runs[i].model), runs[i].model, runs[i].overrides);
+      loaded[i] = load_model_text(spec.model_texts.at(runs[i].model), runs[i].model, runs[i].overrides);
     } catch (const ModelError& e) {
-      if (!first_error) {
-        Diagnostics list;
-        for (auto d : e.diagnostics()) {
-          // An override's problem points at the key that set it in the study file.
-          if (d.file.rfind("--set ", 0) == 0) {
-            const std::string path = d.file.substr(6);
-            d.file = file;
-            d.line = d.column = 0;
-            if (const auto m = override_marks.find(path); m != override_marks.end())
-              d.line = m->second.line + 1, d.column = m->second.column + 1;
-            d.message = "'" + path + "': " + d.message;
-          }
-          d.message += " (in run " + std::to_string(runs[i].index) + ")";
-          list.push_back(d);
-        }
-        first_error = ModelError(list);
+      loaded[i] = std::nullopt;
+      for (const auto& d : study_diagnostics(e.diagnostics(), spec))
+        load_errors[i].push_back(d);
+    }
+    return loaded[i].has_value();
+  };
+  size_t first_ok = runs.size();
+  for (size_t i = 0; i < runs.size() && i < 100 && first_ok == runs.size(); ++i)
+    if (load(i)) first_ok = i;
+  if (first_ok == runs.size()) {
+    Diagnostics list;
+    for (auto d : load_errors.begin()->second) {
+      d.message += " (in run " + std::to_string(runs[load_errors.begin()->first].index) + ")";
+      list.push_back(d);
+    }
+    throw ModelError(list);
+  }
+  // The runs of each level: (parameter, level) → the first few runs that have it.
+  constexpr size_t kTriesPerCase = 20, kMaxProbes = 400;
+  std::map<std::pair<size_t, std::string>, std::vector<size_t>> level_runs;
+  for (size_t i = 0; i < runs.size(); ++i)
+    for (size_t j = 0; j < spec.parameters.size(); ++j) {
+      if (spec.parameters[j].sampled) continue;
+      auto& v = level_runs[{j, runs[i].values[j]}];
+      if (v.size() < (spec.parameters[j].case_overrides.empty() ? 1 : kTriesPerCase)) v.push_back(i);
+    }
+  std::set<std::string> reported;  // path problems, once each
+  auto report_paths = [&](size_t i) {
+    for (const auto& d : load_errors[i])
+      if (d.file == file && d.line > 0 && reported.insert(d.str()).second) r.list.push_back(d);
+  };
+  size_t probes = 0;
+  for (size_t j = 0; j < spec.parameters.size(); ++j) {
+    const StudyParameter& p = spec.parameters[j];
+    if (p.sampled) continue;
+    const bool cases = !p.case_overrides.empty();
+    // Continuation runs every level in one chain: each is loaded, whatever their number.
+    if (!cases && spec.continuation.empty() && probes >= kMaxProbes) continue;
+    for (size_t k = 0; k < p.values.size(); ++k) {
+      const auto it = level_runs.find({j, p.values[k]});
+      if (it == level_runs.end()) continue;
+      bool ok = false;
+      for (size_t i : it->second) {
+        ++probes;
+        ok = load(i);
+        report_paths(i);
+        if (ok || !cases) break;
       }
+      if (ok || !cases) continue;
+      // A case none of whose runs loads: its model's problems, said to come from the case.
+      const YAML::Node key = case_key(params, p.name, p.values[k]);
+      for (const auto& d : load_errors[it->second.front()])
+        if (!(d.file == file && d.line > 0))
+          r.error(key, "parameter '" + p.name + "': case '" + p.values[k] + "' makes no valid model (" +
+                           d.str() + ", in run " + std::to_string(runs[it->second.front()].index) + ")");
     }
   }
-  if (!lm) throw *first_error;
-  const Driver* drv0 = period_driver(lm->model, "");
+  const LoadedModel& lm0 = *loaded[first_ok];
+  const Driver* drv0 = period_driver(lm0.model, "");
   const bool constant_speed = drv0 && drv0->profile == DriverProfile::constant_speed;
   if (!constant_speed && spec.discard_time < 0 && root["transient"] && root["transient"]["periods"])
     r.error(root["transient"], "transient: periods needs a constant-speed rotary driver, which the "
@@ -430,15 +550,49 @@ StudySpec load_study_text(const std::string& text, const std::string& file,
   if (!spec.continuation.empty() && !constant_speed)
     r.error(root["continuation"], "continuation: needs a constant-speed rotary driver (the hand-over "
                                   "keeps the crank angle), which the model has not");
-  const auto info = channel_info(lm->model, Workspace(lm->model));
+  // Continuation hands the crank angle from level to level: every level must turn the driver, and
+  // the same way (checked here, or every later run of the chain would be an error).
+  if (!spec.continuation.empty() && constant_speed) {
+    const StudyParameter& p = spec.parameters.front();
+    const YAML::Node key = params.begin()->first;
+    for (size_t k = 0; k < p.values.size(); ++k) {
+      const auto it = level_runs.find({0, p.values[k]});
+      if (it == level_runs.end() || !loaded.count(it->second.front())) continue;
+      const auto& m = loaded[it->second.front()];
+      if (!m) {
+        r.error(key, "continuation: level '" + p.values[k] + "' of '" + p.name +
+                         "' makes no valid model, and every later run of the chain would start from it: " +
+                         load_errors[it->second.front()].front().str());
+        continue;
+      }
+      const Driver* d = period_driver(m->model, "");
+      if (!d || d->profile != DriverProfile::constant_speed || d->speed == 0.0 ||
+          d->speed * drv0->speed < 0.0)
+        r.error(key, "continuation: level '" + p.values[k] + "' of '" + p.name + "' " +
+                         (d && d->profile == DriverProfile::constant_speed && d->speed == 0.0
+                              ? "stops the driver (speed 0)"
+                              : d && d->profile == DriverProfile::constant_speed
+                                    ? "turns the driver the other way"
+                                    : "gives no turning constant-speed rotary driver (a speed of 0 stops it)") +
+                         "; continuation needs every level to turn it the same way (expected the "
+                         "sign of the first level's speed, " + number_text(drv0->speed) + " rad/s)");
+    }
+  }
+  // Kept channels: each must be in at least one checked run's model.
+  std::set<std::string> present;
   std::vector<std::string> names;
-  for (const auto& c : info) names.push_back(c.name);
+  for (const auto& [i, m] : loaded) {
+    if (!m) continue;
+    for (const auto& c : channel_info(m->model, Workspace(m->model)))
+      if (present.insert(c.name).second) names.push_back(c.name);
+  }
   for (const auto* group : {&spec.channels, &spec.section_channels, &spec.series})
     for (const auto& c : *group)
-      if (std::find(names.begin(), names.end(), c) == names.end()) {
+      if (!present.count(c)) {
         const std::string near = closest_match(c, names);
         r.error(root["keep"], "keep: no channel '" + c + "' in the model" +
-                                  (near.empty() ? "" : ", did you mean '" + near + "'?"));
+                                  (near.empty() ? "" : ", did you mean '" + near + "'?") +
+                                  " (nor in any other run's checked)");
       }
   if (!r.list.empty()) throw ModelError(r.list);
   return spec;
@@ -567,18 +721,23 @@ class Keep : public Observer {
   Keep(const Model& model, const Workspace& ws, const StudySpec& spec, RunRecord& rec, double t_transient)
       : model_(model), rec_(rec), t_transient_(t_transient), extrema_(model) {
     const auto info = channel_info(model, ws);
+    // A kept channel this run's model lacks (a clearance joint made ideal) is left out of its
+    // record; the run keeps everything else.
     auto index = [&](const std::string& n) {
       for (size_t i = 0; i < info.size(); ++i)
         if (info[i].name == n) return static_cast<int>(i);
-      throw std::invalid_argument("no channel '" + n + "' in this run's model");
+      return -1;
     };
-    for (const auto& c : spec.section_channels) section_index_.push_back(index(c));
-    for (const auto& c : spec.series) series_index_.push_back(index(c));
+    for (const auto* group : {&spec.channels, &spec.section_channels, &spec.series})
+      for (const auto& c : *group)
+        if (index(c) < 0 && std::find(missing.begin(), missing.end(), c) == missing.end()) missing.push_back(c);
+    for (const auto& c : spec.section_channels)
+      if (const int i = index(c); i >= 0) section_index_.push_back(i), rec_.section_channels.push_back(c);
+    for (const auto& c : spec.series)
+      if (const int i = index(c); i >= 0) series_index_.push_back(i), rec_.series_channels.push_back(c);
     values_.assign(info.size(), 0.0);
     const double n_out = std::ceil(model.solver.end_time / model.solver.output_interval - 1e-9) + 1;
     every_ = std::max<long>(1, static_cast<long>(std::ceil(n_out / std::max(1, spec.series_points))));
-    rec_.section_channels = spec.section_channels;
-    rec_.series_channels = spec.series;
     rec_.series_values.assign(series_index_.size(), {});
   }
   /// Exact extrema after the transient (ChannelExtrema): outputs, events and every accepted step
@@ -591,6 +750,7 @@ class Keep : public Observer {
     if (e.t >= t_transient_ - 1e-12) extrema_.restart();
   }
   const std::vector<ChannelExtremum>& extrema() const { return extrema_.extrema(); }
+  std::vector<std::string> missing;  ///< kept channels this run's model has not
   void output(double t, const Eigen::VectorXd& y, const Workspace& ws) override {
     if (t >= t_transient_ - 1e-12) extrema_.sample(t, y, ws);
     if (series_index_.empty() || count_++ % every_ != 0) return;
@@ -670,8 +830,10 @@ RunRecord run_study_point(const StudySpec& spec, const StudyRun& run, const std:
     const Model& model = lm.model;
     const double t_begin = from ? from->t : 0.0;
     const double period = drv ? 2 * M_PI / std::abs(drv->speed) : 0.0;
+    // The transient: `time` seconds when given, else `periods` periods of the driver (none
+    // without one).
     const double t_transient =
-        t_begin + (period > 0 ? spec.discard_periods * period : std::max(0.0, spec.discard_time));
+        t_begin + (spec.discard_time >= 0 ? spec.discard_time : period > 0 ? spec.discard_periods * period : 0.0);
     if (t_transient >= model.solver.end_time)
       throw std::invalid_argument("the transient (" + number_text(t_transient - t_begin) +
                                   " s) is not shorter than the run (" +
@@ -680,7 +842,10 @@ RunRecord run_study_point(const StudySpec& spec, const StudyRun& run, const std:
     ao.from = from ? &*from : nullptr;
     ao.ideal_twin = false;
     ao.lyapunov = spec.lyapunov;
-    ao.discard_periods = spec.discard_periods;
+    // Sections and the verdict start at the first period at or after the transient.
+    ao.discard_periods = spec.discard_time >= 0 && period > 0
+                             ? static_cast<int>(std::ceil(spec.discard_time / period - 1e-9))
+                             : spec.discard_periods;
     ao.interrupt = interrupt;
     ao.stats_t0 = t_transient;
     ao.display_points = 50;
@@ -705,6 +870,11 @@ RunRecord run_study_point(const StudySpec& spec, const StudyRun& run, const std:
     }
     rec.status = res.status.ok ? "completed" : "failed";
     rec.message = res.status.ok ? "" : res.status.message;
+    if (!keep.missing.empty()) {
+      std::string list;
+      for (const auto& c : keep.missing) list += (list.empty() ? "" : ", ") + c;
+      rec.message += (rec.message.empty() ? "" : "; ") + std::string("not in this run's model, not kept: ") + list;
+    }
     rec.verdict = ra.verdict.kind;
     // Metrics: the kept channels (default: each clearance joint's Fn), the clearance joints'
     // contact modes, the verdict's numbers; all after the transient.
@@ -738,6 +908,9 @@ RunRecord run_study_point(const StudySpec& spec, const StudyRun& run, const std:
     rec.metrics.push_back({"distinct_points", static_cast<double>(ra.verdict.distinct_points)});
     if (!std::isnan(ra.verdict.lyapunov_exponent))
       rec.metrics.push_back({"lyapunov_exponent", ra.verdict.lyapunov_exponent});
+  } catch (const ModelError& e) {
+    rec.status = "error";
+    rec.message = ModelError(study_diagnostics(e.diagnostics(), spec)).what();
   } catch (const std::exception& e) {
     rec.status = "error";
     rec.message = e.what();

@@ -46,11 +46,16 @@ struct StudySpec {
   std::vector<std::string> series;            ///< channels kept as decimated series
   int series_points = 200;
   int discard_periods = 5;           ///< transient: periods of the period driver skipped
-  double discard_time = -1.0;        ///< transient in s when the model has no period driver
+  /// Transient in s (`transient: {time: S}`); when >= 0 it is used whether or not the model has a
+  /// period driver (then the verdict's sections start at the first period at or after it).
+  double discard_time = -1.0;
   bool lyapunov = false;
   /// "", up, down or both: each run starts from the previous run's final state (one parameter,
   /// its levels in order; both: up, then down), to reveal hysteresis. docs/studies.md.
   std::string continuation;
+  /// Override path → line and column (1-based) of the key that sets it in the study file, so a
+  /// run's model error points into the study rather than at "--set".
+  std::map<std::string, std::pair<int, int>> path_marks;
 };
 
 /// Reads `text`, the study file `file`; `read(path)` returns the text of a model file it names
