@@ -143,6 +143,9 @@ class CvodeBdf final : public Integrator {
   /// events come in time order as in CV_NORMAL mode. Returns CVode's flag; y_ holds the state
   /// at t_ret.
   int one_step_to(double t_out, double& t_ret) {
+    // max_steps bounds the steps per output interval as CVodeSetMaxNumSteps does in CV_NORMAL
+    // mode, where CVODE counts them; one step per call never reaches its count.
+    long steps = 0;
     for (;;) {
       if (root_pending_) {
         if (t_root_ <= t_out) {
@@ -159,6 +162,15 @@ class CvodeBdf final : public Integrator {
         check(CVodeGetDky(mem_, t_out, 0, y_), "CVodeGetDky");
         t_ret = t_out;
         return CV_SUCCESS;
+      }
+      if (steps++ >= o_.max_steps) {
+        char msg[160];
+        std::snprintf(msg, sizeof msg,
+                      "maximum number of steps (%ld) per output interval reached at t = %.9g s",
+                      o_.max_steps, t_step_);
+        last_error_ = msg;
+        t_ret = t_step_;
+        return CV_TOO_MUCH_WORK;
       }
       const double t0 = t_step_;
       double t1 = t0;

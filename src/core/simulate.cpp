@@ -1,5 +1,6 @@
 #include "core/simulate.hpp"
 
+#include <cstdio>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -21,6 +22,11 @@ const char* outcome_name(RunOutcome o) {
 }
 
 namespace {
+
+/// A run stops when more than kMaxEventBurst contact events fall within kEventBurstSpan·max(1, |t|)
+/// seconds of the first of them: no mechanism has that many at one instant (a few per joint).
+constexpr long kMaxEventBurst = 1000;
+constexpr double kEventBurstSpan = 1e-12;
 
 /// A gap beyond this (m) on the wrong side of a joint's mode is a missed crossing.
 constexpr double kModeTolerance = 1e-12;
@@ -214,6 +220,25 @@ bool Simulator::advance_to(double t_target, Observer* observer) try {
       }
       integrator_->reset(adv.t, y_);
       continue;
+    }
+    // Contact events that do not advance time (onset, separation, onset, ... at one instant:
+    // the contact force turns the gap's rate round within round-off) would go on for ever.
+    if (adv.t - burst_t_ <= kEventBurstSpan * std::max(1.0, std::abs(adv.t))) {
+      if (++burst_events_ > kMaxEventBurst) {
+        const Joint& j = model_.joints[ws_.clearance_joints[first]];
+        char msg[400];
+        std::snprintf(msg, sizeof msg,
+                      "%ld contact events within %.1e s of t = %.9g s: the journal's contact "
+                      "opens and closes without time advancing (a stiffness too large for the "
+                      "masses and clearance, or a contact grazing at round-off)",
+                      burst_events_, kEventBurstSpan * std::max(1.0, std::abs(adv.t)), burst_t_);
+        status_ = {false, adv.t, j.name,
+                   std::string(msg) + "; state: " + describe_contacts(model_, ws_)};
+        return false;
+      }
+    } else {
+      burst_t_ = adv.t;
+      burst_events_ = 1;
     }
     for (int c = 0; c < ws_.nc; ++c) {
       if (!(g_event_[c] >= 0.0 || c == first)) continue;

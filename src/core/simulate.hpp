@@ -3,6 +3,7 @@
 /// The run loop: consistent initial state, integration to each output time of the user's fixed
 /// interval (from dense output, independent of the steps), located contact onsets and
 /// separations, and numerical failures turned into a status.
+#include <limits>
 #include <Eigen/Core>
 #include <atomic>
 #include <memory>
@@ -155,6 +156,9 @@ class Simulator {
   /// Sets the integrator's step hook for `observer` (none when it wants no steps).
   void hook_steps(Observer* observer);
   double t_ = 0.0;
+  /// Contact events that do not advance time: the first one's time and how many there were.
+  double burst_t_ = -std::numeric_limits<double>::infinity();
+  long burst_events_ = 0;
   RunStatus status_;
 };
 
