@@ -13,11 +13,14 @@
 
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <condition_variable>
 #include <csignal>
 #include <cstdlib>
 #include <memory>
 #include <mutex>
+#include <sstream>
+#include <stdexcept>
 #include <thread>
 
 #include "analysis/dynamics_analysis.hpp"
@@ -435,6 +438,39 @@ py::object from_yaml(const YAML::Node& n) {
   }
 }
 
+// --- argument checks of the model-free analysis functions ----------------------------------
+// The C++ functions take their inputs as the study layer builds them (one entry per event in
+// every list, times in order); from Python anything may arrive, so the bindings check it and
+// raise ValueError (std::invalid_argument) naming the function, the arguments and what they hold.
+
+std::string number(double x) {
+  std::ostringstream s;
+  s << x;
+  return s.str();
+}
+
+/// `function`: `names` (as "times, onset and velocities") must have equal lengths `sizes`.
+void check_equal_lengths(const std::string& function, const std::string& names,
+                         const std::vector<std::pair<std::string, size_t>>& sizes) {
+  for (const auto& [name, size] : sizes)
+    if (size != sizes.front().second) {
+      std::string got;
+      for (const auto& [n, k] : sizes) got += (got.empty() ? "" : ", ") + n + " " + std::to_string(k);
+      throw std::invalid_argument(function + ": " + names + " must have the same length, got " + got);
+    }
+}
+
+/// `function`: `t` must be non-decreasing (and not NaN).
+void check_non_decreasing(const std::string& function, const std::string& name,
+                          const std::vector<double>& t) {
+  for (size_t i = 0; i < t.size(); ++i)
+    if (std::isnan(t[i]) || (i > 0 && t[i] < t[i - 1]))
+      throw std::invalid_argument(
+          function + ": " + name + " must be non-decreasing, got " + name + "[" +
+          std::to_string(i) + "] = " + number(t[i]) +
+          (i > 0 ? " after " + name + "[" + std::to_string(i - 1) + "] = " + number(t[i - 1]) : ""));
+}
+
 }  // namespace
 
 PYBIND11_MODULE(_lash, m) {
@@ -580,9 +616,27 @@ PYBIND11_MODULE(_lash, m) {
           return d;
         },
         py::arg("x"), py::arg("dt"), py::arg("window") = "hann");
-  m.def("count_distinct", &lash::count_distinct, py::arg("points"), py::arg("tol"));
+  m.def("count_distinct",
+        [](const std::vector<std::vector<double>>& points, double tol) {
+          for (size_t i = 1; i < points.size(); ++i)
+            if (points[i].size() != points[0].size())
+              throw std::invalid_argument(
+                  "count_distinct: every point must have the same number of coordinates, got "
+                  "points[0] with " + std::to_string(points[0].size()) + " and points[" +
+                  std::to_string(i) + "] with " + std::to_string(points[i].size()));
+          if (!(tol >= 0))
+            throw std::invalid_argument("count_distinct: tol must be a distance >= 0, got " +
+                                        number(tol));
+          return lash::count_distinct(points, tol);
+        },
+        py::arg("points"), py::arg("tol"));
   m.def("classify_motion",
         [](double lyapunov, double period, int distinct, int sections, int peaks, double min_end) {
+          if (distinct < 0 || sections < 0 || distinct > sections)
+            throw std::invalid_argument(
+                "classify_motion: expected 0 <= distinct <= sections (distinct points among the "
+                "sections taken), got distinct " + std::to_string(distinct) + ", sections " +
+                std::to_string(sections));
           const lash::Verdict v = lash::classify_motion(lyapunov, period, distinct, sections, peaks, min_end);
           return py::make_tuple(v.kind, v.evidence);
         },
@@ -593,15 +647,29 @@ PYBIND11_MODULE(_lash, m) {
         [](const std::vector<double>& times, const std::vector<bool>& onset,
            const std::vector<double>& velocities, bool in_contact_at_t0, double t0, double t1,
            double continuous_time) {
+          check_equal_lengths("contact_modes", "times, onset and velocities (one entry per event)",
+                              {{"times", times.size()}, {"onset", onset.size()},
+                               {"velocities", velocities.size()}});
+          check_non_decreasing("contact_modes", "times", times);
+          if (!(t0 <= t1))
+            throw std::invalid_argument("contact_modes: expected t0 <= t1, got t0 = " + number(t0) +
+                                        ", t1 = " + number(t1));
+          if (!(continuous_time >= 0))
+            throw std::invalid_argument("contact_modes: continuous_time must be >= 0 s, got " +
+                                        number(continuous_time));
           return modes_dict(lash::contact_modes(times, onset, velocities, in_contact_at_t0, t0, t1,
                                                 continuous_time));
         },
         py::arg("times"), py::arg("onset"), py::arg("velocities"), py::arg("in_contact_at_t0"),
         py::arg("t0"), py::arg("t1"), py::arg("continuous_time"));
   m.def("decimate_min_max",
-        [](const std::vector<double>& t, const std::vector<double>& v, size_t buckets) {
+        [](const std::vector<double>& t, const std::vector<double>& v, long long buckets) {
+          check_equal_lengths("decimate_min_max", "t and v", {{"t", t.size()}, {"v", v.size()}});
+          if (buckets < 0)
+            throw std::invalid_argument("decimate_min_max: buckets must be >= 0, got " +
+                                        std::to_string(buckets));
           std::vector<double> to, vo;
-          lash::decimate_min_max(t, v, buckets, to, vo);
+          lash::decimate_min_max(t, v, static_cast<size_t>(buckets), to, vo);
           return py::make_tuple(to_numpy(std::move(to)), to_numpy(std::move(vo)));
         },
         py::arg("t"), py::arg("v"), py::arg("buckets"));

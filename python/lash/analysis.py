@@ -18,6 +18,15 @@ __all__ = ["analyze", "poincare", "verdict", "spectra", "spectrum", "amplitude_s
            "decimate_min_max"]
 
 
+def _vector(name: str, x) -> np.ndarray:
+    """`x` as a 1-D float array; ValueError naming the argument when it is not one."""
+    a = np.asarray(x, dtype=float)
+    if a.ndim != 1:
+        raise ValueError(f"{name}: expected a 1-D sequence of numbers, got an array of shape "
+                         f"{a.shape}")
+    return a
+
+
 def _model_of(model_or_result):
     from . import Model, Result, _as_model
     if isinstance(model_or_result, Result):
@@ -103,12 +112,13 @@ def amplitude_spectrum(x, dt: float, window: str = "hann") -> Dict[str, Any]:
     "hann" or "rectangular" (C++ lash::amplitude_spectrum, FFTW): a sinusoid of amplitude A on a
     bin reads A. Returns {frequency (Hz), amplitude, psd (units^2/Hz), window}. Raises ValueError
     for fewer than 4 samples or dt <= 0."""
-    return _lash.amplitude_spectrum(np.asarray(x, dtype=float), float(dt), window)
+    return _lash.amplitude_spectrum(_vector("x", x), float(dt), window)
 
 
 def count_distinct(points, tol: float) -> int:
     """Number of distinct points (greedy clustering within Euclidean distance `tol`): a period-k
-    orbit sampled stroboscopically gives k (C++ lash::count_distinct)."""
+    orbit sampled stroboscopically gives k (C++ lash::count_distinct). Raises ValueError for
+    points of different dimensions or tol < 0."""
     return _lash.count_distinct([list(map(float, p)) for p in points], float(tol))
 
 
@@ -129,13 +139,20 @@ def contact_modes(times, onset, velocities, in_contact_at_t0: bool, t0: float, t
                   continuous_time: float) -> Dict[str, Any]:
     """Contact episodes from located onsets/separations over [t0, t1] s: episodes longer than
     `continuous_time` are continuous contact, shorter ones impacts (C++ lash::contact_modes).
-    Pass a Result's events: contact_modes(ev["time"], ev["event"] == "onset", ev["velocity"], ...)."""
-    return _lash.contact_modes(list(map(float, times)), [bool(o) for o in onset],
-                               list(map(float, velocities)), in_contact_at_t0, t0, t1,
-                               continuous_time)
+    Pass a Result's events: contact_modes(ev["time"], ev["event"] == "onset", ev["velocity"], ...).
+    Raises ValueError unless times, onset and velocities have one entry per event each, times
+    are non-decreasing, t0 <= t1 and continuous_time >= 0."""
+    onset = np.asarray(onset)
+    if onset.ndim != 1:
+        raise ValueError(f"onset: expected a 1-D sequence of booleans, got an array of shape "
+                         f"{onset.shape}")
+    return _lash.contact_modes(_vector("times", times).tolist(), [bool(o) for o in onset],
+                               _vector("velocities", velocities).tolist(), in_contact_at_t0,
+                               t0, t1, continuous_time)
 
 
 def decimate_min_max(t, v, buckets: int) -> Tuple[np.ndarray, np.ndarray]:
     """Reduces (t, v) to about 2*buckets points keeping each bucket's min and max in time order,
-    so impact spikes survive plotting."""
-    return _lash.decimate_min_max(np.asarray(t, float), np.asarray(v, float), int(buckets))
+    so impact spikes survive plotting. Raises ValueError unless t and v have the same length and
+    buckets >= 0 (0 keeps every point)."""
+    return _lash.decimate_min_max(_vector("t", t), _vector("v", v), int(buckets))

@@ -7,6 +7,7 @@ import math
 import os
 import signal
 import subprocess
+import sys
 import threading
 import time
 
@@ -211,6 +212,53 @@ def test_analysis():
     assert kind == "periodic" and evidence
     with pytest.raises(ValueError, match="window"):
         lash.analysis.amplitude_spectrum(np.ones(8), 1e-3, "hamming")
+
+
+def test_analysis_functions_refuse_inconsistent_arguments():
+    """Lists of unequal length, unsorted times, ragged points and negative tolerances raise
+    ValueError naming the arguments, rather than crashing or returning a silent result."""
+    A = lash.analysis
+    # Two events with no velocity each read past the end of velocities (a crash once): in a
+    # child process, so that a crash fails this test and not the whole run.
+    child = subprocess.run(
+        [sys.executable, "-c",
+         "import numpy as np, lash.analysis as A\n"
+         "try:\n"
+         "    A.contact_modes(np.array([0.1, 0.2]), np.array([True, False]), np.zeros(0),"
+         " False, 0, 1, 0.1)\n"
+         "except ValueError as e:\n"
+         "    print(e)\n"],
+        capture_output=True, text=True, env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)})
+    assert child.returncode == 0, child.stderr
+    assert "times 2, onset 2, velocities 0" in child.stdout
+    with pytest.raises(ValueError, match="times, onset and velocities .*times 3, onset 1"):
+        A.contact_modes([0.1, 0.2, 0.3], [True], [1.0, 0.0, 1.0], False, 0, 1, 0.1)
+    with pytest.raises(ValueError, match=r"times must be non-decreasing, got times\[1\] = 0.1 after"):
+        A.contact_modes([0.2, 0.1], [True, False], [1.0, 0.0], False, 0, 1, 0.01)
+    with pytest.raises(ValueError, match="t0 <= t1"):
+        A.contact_modes([], [], [], False, 1, 0, 0.01)
+    with pytest.raises(ValueError, match="continuous_time must be >= 0"):
+        A.contact_modes([], [], [], False, 0, 1, -0.01)
+    modes = A.contact_modes([0.1, 0.2, 0.5, 0.51], [True, False, True, False], [2.0, 0, 3.0, 0],
+                            False, 0, 1, 0.05)
+    assert modes["episodes"] == [(0.1, 0.2, True), (0.5, 0.51, False)] and modes["impacts"] == 2
+    assert modes["continuous_share"] == pytest.approx(0.1)
+    assert modes["impact_share"] == pytest.approx(0.01)
+
+    with pytest.raises(ValueError, match="t and v must have the same length, got t 3, v 2"):
+        A.decimate_min_max([0, 1, 2], [0, 1], 1)
+    with pytest.raises(ValueError, match="buckets must be >= 0"):
+        A.decimate_min_max([0, 1], [0, 1], -1)
+    t, v = A.decimate_min_max(np.arange(100.0), np.sin(np.arange(100.0)), 10)
+    assert len(t) == len(v) <= 20
+    with pytest.raises(ValueError, match=r"points\[0\] with 2 and points\[1\] with 1"):
+        A.count_distinct([[1, 2], [1]], 0.1)
+    with pytest.raises(ValueError, match="tol must be a distance >= 0, got -1"):
+        A.count_distinct([[1, 2], [1, 2]], -1)
+    with pytest.raises(ValueError, match="0 <= distinct <= sections"):
+        A.classify_motion(float("nan"), 0.012, 5, 2)
+    with pytest.raises(ValueError, match=r"x: expected a 1-D sequence.*\(2, 4\)"):
+        A.amplitude_spectrum(np.ones((2, 4)), 1e-3)
 
 
 def test_to_pandas(runs):
