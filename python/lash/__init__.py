@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 from typing import Any, Dict, Iterable, List, Optional, Sequence
 
 import numpy as np
@@ -51,6 +52,28 @@ def _yaml_value(value: Any) -> str:
     raise TypeError(f"cannot set a {type(value).__name__} as a model value")
 
 
+def _override_list(overrides: str | Iterable[str]) -> List[str]:
+    """`overrides` as a list of "KEY.PATH=VALUE" strings: a single string is one override (not
+    its characters); anything else must be an iterable of strings."""
+    if isinstance(overrides, str):
+        return [overrides]
+    try:
+        items = list(overrides)
+    except TypeError:
+        raise TypeError(f"overrides: expected a list of \"KEY.PATH=VALUE\" strings, got "
+                        f"{type(overrides).__name__}") from None
+    for o in items:
+        if not isinstance(o, str):
+            raise TypeError(f"overrides: expected \"KEY.PATH=VALUE\" strings, got {o!r} "
+                            f"({type(o).__name__})")
+    return items
+
+
+# Singular of each model section holding named elements, for messages.
+_ELEMENT_KIND = {"bodies": "body", "joints": "joint", "drivers": "driver", "loads": "load",
+                 "sensors": "sensor"}
+
+
 class Model:
     """A mechanism: a model file's text (or data built in code) plus overrides.
 
@@ -59,12 +82,12 @@ class Model:
     """
 
     def __init__(self, text: Optional[str] = None, *, filename: str = "<model>",
-                 data: Optional[dict] = None, overrides: Sequence[str] = ()) -> None:
+                 data: Optional[dict] = None, overrides: str | Sequence[str] = ()) -> None:
         """Use `lash.load(path)`, `lash.loads(text)` or `Model.new(name)` rather than this."""
         self._text = text
         self._data = data
         self.filename = filename
-        self.overrides: List[str] = list(overrides)
+        self.overrides: List[str] = _override_list(overrides)
         self._compiled = None
 
     # --- construction --------------------------------------------------------------------
@@ -94,7 +117,7 @@ class Model:
     def _add(self, key: str, name: str, spec: dict) -> "Model":
         section = self._section(key)
         if name in section:
-            raise ValueError(f"{key[:-1]} '{name}' exists already")
+            raise ValueError(f"{_ELEMENT_KIND.get(key, key)} '{name}' exists already")
         section[name] = {k: v for k, v in spec.items() if v is not None}
         return self
 
@@ -151,6 +174,9 @@ class Model:
         """Changes one value as the CLI's `--set path=value` does, e.g.
         model.set("joints.rod_slider.clearance", 0.25e-3). Checked when the model is next used;
         a path that does not exist raises ModelError there."""
+        if not isinstance(path, str):
+            raise TypeError(f"path: expected a dotted path string such as "
+                            f"\"joints.rod_slider.clearance\", got {type(path).__name__}")
         if "=" in path:
             raise ValueError(f"path '{path}' contains '='; pass the value separately")
         self.overrides.append(f"{path}={_yaml_value(value)}")
@@ -167,10 +193,11 @@ class Model:
         """The model file's text, overrides not applied."""
         return self._text if self._text is not None else _lash.emit_yaml(self._data)
 
-    def compiled(self, extra_overrides: Sequence[str] = ()):
+    def compiled(self, extra_overrides: str | Sequence[str] = ()):
         """The model loaded and validated by the C++ loader (cached); raises ModelError."""
         if extra_overrides:
-            return _lash.load_text(self.text(), self.filename, self.overrides + list(extra_overrides))
+            return _lash.load_text(self.text(), self.filename,
+                                   self.overrides + _override_list(extra_overrides))
         if self._compiled is None:
             self._compiled = _lash.load_text(self.text(), self.filename, self.overrides)
         return self._compiled
@@ -205,23 +232,24 @@ class Model:
         return f"<lash.Model {self.filename!r}, {len(self.overrides)} overrides>"
 
 
-def load(path: str | os.PathLike, overrides: Iterable[str] = ()) -> Model:
+def load(path: str | os.PathLike, overrides: str | Iterable[str] = ()) -> Model:
     """Reads a model file (YAML, docs/model-format.md) and validates it.
 
-    `overrides` are "KEY.PATH=VALUE" strings as for `lash run --set`. Raises ModelError with
+    `overrides` are "KEY.PATH=VALUE" strings as for `lash run --set` (a single string is one
+    override). Raises ModelError with
     every problem as `file:line:column: element: message` (also as `.diagnostics`, a list of
     (file, line, column, element, message)), OSError when the file cannot be read."""
     path = os.fspath(path)
     with open(path, encoding="utf-8") as f:
         text = f.read()
-    model = Model(text, filename=path, overrides=list(overrides))
+    model = Model(text, filename=path, overrides=overrides)
     model.check()
     return model
 
 
-def loads(text: str, filename: str = "<string>", overrides: Iterable[str] = ()) -> Model:
+def loads(text: str, filename: str = "<string>", overrides: str | Iterable[str] = ()) -> Model:
     """As `load`, from the text of a model file; `filename` is used in messages."""
-    model = Model(text, filename=filename, overrides=list(overrides))
+    model = Model(text, filename=filename, overrides=overrides)
     model.check()
     return model
 
@@ -266,6 +294,10 @@ class Result:
 
     def __getitem__(self, channel: str) -> np.ndarray:
         """One channel's values at `time` (a view, SI units)."""
+        if not isinstance(channel, str):
+            raise TypeError(f"a Result is indexed by a channel name such as "
+                            f"'{self.channels[0] if self.channels else 'slider.ax'}', got "
+                            f"{channel!r} ({type(channel).__name__}); rows are result.values[i]")
         try:
             return self.values[:, self._index[channel]]
         except KeyError:
@@ -369,28 +401,69 @@ def _as_model(model: Model | str | os.PathLike) -> Model:
     raise TypeError(f"expected a lash.Model or a model file path, got {type(model).__name__}")
 
 
+# The model paths that simulate's keyword arguments set.
+_RUN_KEYWORDS = {"solver.end_time": "t_end", "solver.output_interval": "output_interval",
+                 "solver.integrator": "integrator"}
+
+
 def _run_overrides(t_end: Optional[float], output_interval: Optional[float],
-                   integrator: Optional[str], overrides: Iterable[str]) -> List[str]:
-    extra = list(overrides)
+                   integrator: Optional[str], overrides: str | Iterable[str]) -> List[str]:
+    extra = _override_list(overrides)
     if t_end is not None:
         if not (isinstance(t_end, (int, float)) and math.isfinite(t_end) and t_end > 0):
             raise ValueError(f"t_end must be a finite time > 0 s, got {t_end!r}")
         extra.append(f"solver.end_time={_yaml_value(float(t_end))}")
     if output_interval is not None:
+        if not (isinstance(output_interval, (int, float)) and math.isfinite(output_interval)
+                and output_interval > 0):
+            raise ValueError(f"output_interval must be a finite time > 0 s, got {output_interval!r}")
         extra.append(f"solver.output_interval={_yaml_value(float(output_interval))}")
     if integrator is not None:
+        if not isinstance(integrator, str):
+            raise TypeError(f"integrator: expected a name such as \"dopri5\" or \"bdf\", got "
+                            f"{type(integrator).__name__}")
         extra.append(f"solver.integrator={integrator}")
     return extra
 
 
+def _keyword_diagnostics(error: ModelError, keywords: Dict[str, str]) -> ModelError:
+    """`error` with the overrides that keyword arguments made (`keywords`: model path ->
+    argument) named as those arguments, "t_end (solver.end_time)", not as the CLI's
+    "--set solver.end_time"; the same error when none of them is named."""
+    set_with = " (value set with --set)"  # the loader's note on a value from an override
+    diagnostics, changed = [], False
+    for file, line, column, element, message in error.diagnostics:
+        if file.startswith("--set ") and file[len("--set "):] in keywords:
+            path = file[len("--set "):]
+            file, changed = f"{keywords[path]} ({path})", True
+        elif element == "solver" and message.endswith(set_with):
+            # The key the message is about opens it: "output_interval must be > 0",
+            # "'end_time' must be a number", "unknown integrator 'rk4'".
+            named = [k for p, k in keywords.items()
+                     if re.match(rf"(unknown )?'?{p.split('.')[-1]}\b", message)]
+            if named:
+                message = message[:-len(set_with)] + f" (value of the argument {named[0]})"
+                changed = True
+        diagnostics.append((file, line, column, element, message))
+    if not changed:
+        return error
+    # As the C++ Diagnostic::str: file[:line:column]: [element: ]message, one a line.
+    text = "".join(f"{f}{f':{l}:{c}' if l > 0 else ''}: {e + ': ' if e else ''}{m}\n"
+                   for f, l, c, e, m in diagnostics)
+    renamed = ModelError(text)
+    renamed.diagnostics = diagnostics
+    return renamed
+
+
 def simulate(model: Model | str | os.PathLike, t_end: Optional[float] = None, *,
              output_interval: Optional[float] = None, integrator: Optional[str] = None,
-             overrides: Iterable[str] = ()) -> Result:
+             overrides: str | Iterable[str] = ()) -> Result:
     """Runs `model` from t = 0 to `t_end` (s; default the model's solver.end_time) and returns
     its outputs in memory as a `Result`, the same numbers `lash run` writes to timeseries.csv.
 
     output_interval (s) and integrator ("dopri5" or "bdf") override the model's solver
-    settings, `overrides` are more "KEY.PATH=VALUE" strings; `model` itself is not changed.
+    settings, `overrides` are more "KEY.PATH=VALUE" strings (a single string is one override);
+    `model` itself is not changed.
     The GIL is released while the engine runs. Ctrl-C (SIGINT) stops the run at its next output
     and raises KeyboardInterrupt. A numerical failure does not raise: the result holds the run up
     to the failure and `result.status` says what happened (`result.ok` is False).
@@ -398,7 +471,18 @@ def simulate(model: Model | str | os.PathLike, t_end: Optional[float] = None, *,
     exists."""
     model = _as_model(model)
     extra = _run_overrides(t_end, output_interval, integrator, overrides)
-    compiled = model.compiled(extra)
+    try:
+        compiled = model.compiled(extra)
+    except ModelError as e:
+        # A path the caller also set in an override string keeps its "--set" name.
+        set_by_caller = {o.split("=", 1)[0] for o in model.overrides + _override_list(overrides)}
+        given = {"t_end": t_end, "output_interval": output_interval, "integrator": integrator}
+        keywords = {p: k for p, k in _RUN_KEYWORDS.items()
+                    if given[k] is not None and p not in set_by_caller}
+        renamed = _keyword_diagnostics(e, keywords)
+        if renamed is e:
+            raise
+        raise renamed from None
     return Result(model, compiled, _lash.simulate(compiled))
 
 
@@ -446,22 +530,32 @@ class Study:
         return f"<lash.Study {self.name!r}: {len(self.rows)} of {self.total_runs} runs, {failed} failed>"
 
 
-def sweep(study: str | os.PathLike, output: str | os.PathLike, *, jobs: int = 0,
+def sweep(study: str | os.PathLike, output: str | os.PathLike, *, jobs: Optional[int] = 0,
           resume: bool = False) -> Study:
     """Runs a study file (docs/studies.md) on `jobs` local threads (0: every core), as
     `lash sweep STUDY -o OUTPUT [--resume]`: every finished run is written to OUTPUT/study.db in
     its own transaction, runs.csv and sections.csv beside it. Returns the Study read back.
+    `jobs=None` is the default, every core.
 
-    Raises ModelError (with file:line:column) for a bad study file, ValueError when OUTPUT holds a
+    Raises OSError (FileNotFoundError, ...) when the study file cannot be read, ModelError (with
+    file:line:column) for a bad study file, ValueError when OUTPUT holds a
     study already and `resume` is False (or holds another study), IoError when the database cannot
     be written. Ctrl-C stops the runs at their next output; the finished ones stay recorded and
     `resume=True` runs the rest.
     """
+    if jobs is None:
+        jobs = 0
+    if isinstance(jobs, bool) or not isinstance(jobs, (int, np.integer)):
+        raise TypeError(f"jobs: expected a number of threads (0 or None: every core), got "
+                        f"{jobs!r} ({type(jobs).__name__})")
     if jobs < 0:
         raise ValueError(f"jobs={jobs}: expected 0 (every core) or a positive number")
     if not os.fspath(output):
         raise ValueError("output: expected a folder name")
-    _lash.sweep(os.fspath(study), os.fspath(output), jobs, resume)
+    study = os.fspath(study)
+    with open(study, "rb"):  # FileNotFoundError, IsADirectoryError, ... with the path
+        pass
+    _lash.sweep(study, os.fspath(output), int(jobs), resume)
     return Study(os.path.join(os.fspath(output), "study.db"))
 
 

@@ -261,6 +261,56 @@ def test_analysis_functions_refuse_inconsistent_arguments():
         A.amplitude_spectrum(np.ones((2, 4)), 1e-3)
 
 
+def test_overrides_may_be_one_string():
+    """A single "path=value" string is one override, not a list of its characters."""
+    a = lash.simulate(FLORES, t_end=0.0005, overrides="solver.rtol=1e-6")
+    b = lash.simulate(FLORES, t_end=0.0005, overrides=["solver.rtol=1e-6"])
+    assert a.ok and np.array_equal(a.values, b.values)
+    assert a.model.overrides == []  # simulate does not change the model
+    assert lash.load(FLORES, overrides="solver.rtol=1e-6").overrides == ["solver.rtol=1e-6"]
+    assert lash.Model(overrides="solver.rtol=1e-6").overrides == ["solver.rtol=1e-6"]
+    with pytest.raises(TypeError, match="KEY.PATH=VALUE"):
+        lash.simulate(FLORES, t_end=0.0005, overrides=[1e-6])
+    with pytest.raises(TypeError, match="list of"):
+        lash.simulate(FLORES, t_end=0.0005, overrides=3)
+
+
+def test_messages_name_what_was_passed(tmp_path):
+    m = lash.Model.new("x")
+    m.add_body("b", mass=1.0, inertia=1.0)
+    with pytest.raises(ValueError, match="^body 'b' exists already$"):
+        m.add_body("b", mass=1.0, inertia=1.0)
+    m.add_driver("d", joint="j", speed_rpm=1)
+    with pytest.raises(ValueError, match="^driver 'd' exists already$"):
+        m.add_driver("d", joint="j", speed_rpm=1)
+    # t_end is a keyword argument, not a --set option.
+    with pytest.raises(lash.ModelError) as err:
+        lash.simulate(lash.Model.new("x"), 0.01)
+    assert str(err.value) == "t_end (solver.end_time): no 'solver' in the model\n"
+    assert err.value.diagnostics == [("t_end (solver.end_time)", 0, 0, "",
+                                      "no 'solver' in the model")]
+    with pytest.raises(lash.ModelError, match="output_interval \\(solver.output_interval\\)"):
+        lash.simulate(lash.Model.new("x"), output_interval=1e-3)
+    with pytest.raises(lash.ModelError, match=r"unknown integrator 'rk4'.*\(value of the argument "
+                       r"integrator\)\n$"):
+        lash.simulate(FLORES, t_end=0.0005, integrator="rk4")
+    # The caller's own override string keeps its name.
+    with pytest.raises(lash.ModelError, match="^--set solver.end_time: no 'solver'"):
+        lash.simulate(lash.Model.new("x"), overrides="solver.end_time=1")
+    result = lash.simulate(FLORES, t_end=0.0005)
+    with pytest.raises(TypeError, match="channel name such as 'crank.x', got 0 \\(int\\)"):
+        result[0]
+    with pytest.raises(TypeError, match="path: expected a dotted path string.*got NoneType"):
+        lash.load(FLORES).set(None, 1)
+    with pytest.raises(TypeError, match="jobs: expected a number of threads"):
+        lash.sweep(FLORES, tmp_path / "out", jobs="2")
+    missing = tmp_path / "missing.yaml"
+    with pytest.raises(FileNotFoundError) as err:
+        lash.sweep(missing, tmp_path / "out")
+    assert str(missing) in str(err.value)
+    assert not (tmp_path / "out").exists()
+
+
 def test_to_pandas(runs):
     pd = pytest.importorskip("pandas")
     _, result = runs
@@ -303,7 +353,7 @@ def test_sweep_from_python_equals_the_cli(tmp_path):
     assert keep(c.rows) == keep(s.rows)
     with pytest.raises(ValueError, match="add --resume"):
         lash.sweep(study, tmp_path / "py")
-    assert len(lash.sweep(study, tmp_path / "py", resume=True)) == 3
+    assert len(lash.sweep(study, tmp_path / "py", resume=True, jobs=None)) == 3  # None: every core
     bad = tmp_path / "bad.yaml"
     bad.write_text(f"study: bad\nmodel: {FLORES}\nparameters: {{drivers.crank.speed_rpm: {{vals: [1]}}}}\n")
     with pytest.raises(lash.ModelError, match="bad.yaml:3"):
