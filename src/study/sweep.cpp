@@ -225,21 +225,15 @@ void read_parameter(Reader& r, const YAML::Node& key, const YAML::Node& v, Study
   spec.parameters.push_back(std::move(p));
 }
 
-/// The node of case `name` of the cases parameter `parameter` (null when absent).
-YAML::Node case_node(const YAML::Node& params, const std::string& parameter, const std::string& name) {
+/// Case `name` of the cases parameter `parameter`: its key (the name, for messages; `params`
+/// when absent) and its node (null when absent).
+std::pair<YAML::Node, YAML::Node> find_case(const YAML::Node& params, const std::string& parameter,
+                                            const std::string& name) {
   for (const auto& kv : params)
     if (kv.first.as<std::string>("") == parameter && kv.second.IsMap() && kv.second["cases"].IsMap())
       for (const auto& c : kv.second["cases"])
-        if (c.first.as<std::string>("") == name) return c.second;
-  return YAML::Node();
-}
-/// The key (the case's name) of that case, for messages.
-YAML::Node case_key(const YAML::Node& params, const std::string& parameter, const std::string& name) {
-  for (const auto& kv : params)
-    if (kv.first.as<std::string>("") == parameter && kv.second.IsMap() && kv.second["cases"].IsMap())
-      for (const auto& c : kv.second["cases"])
-        if (c.first.as<std::string>("") == name) return c.first;
-  return params;
+        if (c.first.as<std::string>("") == name) return {c.first, c.second};
+  return {params, YAML::Node()};
 }
 
 /// A fixed 64-bit generator (splitmix64): the same sequence everywhere.
@@ -350,7 +344,7 @@ StudySpec load_study_text(const std::string& text, const std::string& file,
         continue;
       }
       for (size_t k = 0; k < p.values.size(); ++k) {
-        const YAML::Node c = case_node(params, p.name, p.values[k]);
+        const YAML::Node c = find_case(params, p.name, p.values[k]).second;
         if (!c.IsMap()) continue;
         for (const auto& o : c)
           setters.push_back({o.first.as<std::string>(""),
@@ -534,7 +528,7 @@ StudySpec load_study_text(const std::string& text, const std::string& file,
       }
       if (ok || !cases) continue;
       // A case none of whose runs loads: its model's problems, said to come from the case.
-      const YAML::Node key = case_key(params, p.name, p.values[k]);
+      const YAML::Node key = find_case(params, p.name, p.values[k]).first;
       for (const auto& d : load_errors[it->second.front()])
         if (!(d.file == file && d.line > 0))
           r.error(key, "parameter '" + p.name + "': case '" + p.values[k] + "' makes no valid model (" +
