@@ -457,6 +457,17 @@ TEST(ModelLoader, TheNumberOfOutputsIsBoundedBeforeRunning) {
   EXPECT_EQ(problems(kGood, {"solver.max_outputs=0.5"}).size(), 1u);
 }
 
+TEST(ModelLoader, RelativeToleranceIsOneTheErrorControlCanHonour) {
+  // rtol 0.5 made DOPRI5's first step fail with "step size underflow"; 1e-17 is below round-off.
+  for (const char* bad : {"solver.rtol=0.5", "solver.rtol=1e-17", "solver.rtol=0"}) {
+    auto d = problems(kGood, {bad});
+    ASSERT_EQ(d.size(), 1u) << bad;
+    EXPECT_NE(d[0].message.find("rtol must be in [1e-14, 0.1]"), std::string::npos) << d[0].message;
+  }
+  EXPECT_TRUE(problems(kGood, {"solver.rtol=0.1"}).empty());
+  EXPECT_TRUE(problems(kGood, {"solver.rtol=1e-14"}).empty());
+}
+
 TEST(ModelLoader, OnlyRegularFilesOfBoundedSizeAreRead) {
   try {
     load_model_file("/dev/zero");

@@ -144,6 +144,11 @@ TEST(RunFolder, AnalysesFromTheFilesMatchThoseMadeDuringTheRun) {
   EXPECT_TRUE(mentions(files.provenance.read, "stroboscopic sections: from the outputs"));
   EXPECT_TRUE(mentions(files.provenance.resimulated, "ideal twin"));
   EXPECT_TRUE(mentions(files.provenance.resimulated, "Lyapunov start state"));
+  // The exponent's method is named as computed (the default, variational; once said "two
+  // trajectories" whatever the method).
+  ASSERT_EQ(files.lyapunov->method, "variational");
+  EXPECT_TRUE(mentions(files.provenance.resimulated, "Lyapunov exponent: variational spectrum"));
+  EXPECT_FALSE(mentions(files.provenance.resimulated, "two trajectories"));
   EXPECT_TRUE(files.provenance.skipped.empty());
   fs::remove_all(dir);
 }

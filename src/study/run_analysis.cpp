@@ -452,6 +452,12 @@ int non_harmonic_peaks(const Spectrum& s, double f0) {
   return n;
 }
 
+/// How an exponent was computed, for the provenance list.
+std::string lyapunov_provenance(const LyapunovEstimate& l) {
+  return l.method == "variational" ? "variational spectrum (tangent equations, saltation matrices)"
+                                   : "two trajectories";
+}
+
 /// Largest Lyapunov exponent: two trajectories from `y_start` at `t_start` (the state after the
 /// transient), each perturbation projected onto the constraints; separation measured in
 /// configuration space (body coordinates, m and rad; velocities would weigh the stiff contact
@@ -1085,8 +1091,9 @@ RunAnalysis analyze_run(const Model& model, const AnalysisOptions& o, Observer* 
   out.provenance.read.push_back("the main run's outputs, events and sections, observed while it ran");
   if (out.ideal_twin) out.provenance.resimulated.push_back("ideal twin: run beside the main run");
   if (out.lyapunov && out.lyapunov->estimated)
-    out.provenance.resimulated.push_back("Lyapunov exponent: two trajectories from the run's "
-                                         "state at the first section after the transient");
+    out.provenance.resimulated.push_back("Lyapunov exponent: " + lyapunov_provenance(*out.lyapunov) +
+                                         " from the run's state at the first section after the "
+                                         "transient");
   return out;
 }
 
@@ -1252,7 +1259,8 @@ RunAnalysis analyze_recorded_run(const Model& model, const AnalysisOptions& o, R
                                     have_start ? &start : nullptr, start_t,
                                     exact ? &*exact : nullptr);
   if (out.lyapunov && out.lyapunov->estimated)
-    prov.resimulated.push_back("Lyapunov exponent: two trajectories, simulated now");
+    prov.resimulated.push_back("Lyapunov exponent: " + lyapunov_provenance(*out.lyapunov) +
+                               ", simulated now");
   out.provenance = std::move(prov);
   return out;
 }
