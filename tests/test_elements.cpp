@@ -317,6 +317,57 @@ TEST(State, AContinuedRunAgreesWithAnUninterruptedOneOnARegularModel) {
       EXPECT_NEAR(r1[c][k0 + i], r3[c][i], 1e-7 * (1 + std::abs(r1[c][k0 + i]))) << c;
 }
 
+TEST(State, AnInterruptStopsTheRunAtTheNextStepNotTheNextOutput) {
+  // One output interval for the whole run (0.012 s, one crank revolution): the flag a signal
+  // handler would set is raised during the 40th integrator step. The run stops at that step's
+  // end, not at the output 0.012 s later, and its final state continues the run to the same end
+  // as an uninterrupted run, within the tolerances.
+  struct RaiseAt : Recorder {
+    RaiseAt(const Model& m, std::atomic<int>& flag) : Recorder(m), flag_(flag) {}
+    bool wants_steps() const override { return true; }
+    void step(double, double t1, const Eigen::VectorXd&, const Workspace&, StepProbe&) override {
+      if (++steps == 40) flag_.store(15), t_raised = t1;
+    }
+    std::atomic<int>& flag_;
+    int steps = 0;
+    double t_raised = 0.0;
+  };
+  for (const char* integrator : {"dopri5", "bdf"}) {
+    SCOPED_TRACE(integrator);
+    Model m = load_model_file(example_path("flores_slider_crank.yaml"),
+                              {"solver.end_time=0.012", "solver.output_interval=0.012",
+                               std::string("solver.integrator=") + integrator})
+                  .model;
+    Workspace w1(m);
+    Recorder whole(m);
+    ASSERT_TRUE(simulate(m, w1, whole).status.ok);
+    std::atomic<int> flag{0};
+    Workspace w2(m);
+    RaiseAt raising(m, flag);
+    RunOptions o;
+    o.interrupt = &flag;
+    const RunResult cut = simulate(m, w2, raising, {}, {}, o);
+    EXPECT_EQ(cut.status.outcome, RunOutcome::interrupted);
+    EXPECT_NE(cut.status.message.find("interrupted by signal 15 at t = "), std::string::npos)
+        << cut.status.message;
+    EXPECT_EQ(raising.steps, 40);  // no step after the one that raised the flag
+    EXPECT_EQ(cut.status.t, raising.t_raised);
+    EXPECT_EQ(cut.final_state.t, raising.t_raised);
+    EXPECT_LT(cut.final_state.t, 0.006);
+    // The start, then the state the run stopped in (off the output grid).
+    EXPECT_EQ(raising.time, (std::vector<double>{0.0, raising.t_raised}));
+    EXPECT_EQ(resume_problem(m, w2, cut.final_state), "");
+    Workspace w3(m);
+    Recorder rest(m);
+    RunOptions from;
+    from.from = &cut.final_state;
+    ASSERT_TRUE(simulate(m, w3, rest, {}, {}, from).status.ok);
+    ASSERT_EQ(rest.time.back(), 0.012);
+    for (const char* c : {"slider.x", "rod.phi"})
+      EXPECT_NEAR(rest[c].back(), whole[c].back(), 1e-5 * (1 + std::abs(whole[c].back()))) << c;
+  }
+}
+
 TEST(State, AFailedRunSavesAConsistentStateToContinueFrom) {
   // A step budget that runs out mid-run: the saved state is the last point reached, its time
   // and values together, so it satisfies the constraints and a run can continue from it.

@@ -464,7 +464,7 @@ def simulate(model: Model | str | os.PathLike, t_end: Optional[float] = None, *,
     output_interval (s) and integrator ("dopri5" or "bdf") override the model's solver
     settings, `overrides` are more "KEY.PATH=VALUE" strings (a single string is one override);
     `model` itself is not changed.
-    The GIL is released while the engine runs. Ctrl-C (SIGINT) stops the run at its next output
+    The GIL is released while the engine runs. Ctrl-C (SIGINT) stops the run within one integrator step
     and raises KeyboardInterrupt. A numerical failure does not raise: the result holds the run up
     to the failure and `result.status` says what happened (`result.ok` is False).
     Raises ModelError for a bad model or override, RuntimeError when no consistent initial state
@@ -540,8 +540,8 @@ def sweep(study: str | os.PathLike, output: str | os.PathLike, *, jobs: Optional
     Raises OSError (FileNotFoundError, ...) when the study file cannot be read, ModelError (with
     file:line:column) for a bad study file, ValueError when OUTPUT holds a
     study already and `resume` is False (or holds another study), IoError when the database cannot
-    be written. Ctrl-C stops the runs at their next output; the finished ones stay recorded and
-    `resume=True` runs the rest.
+    be written. Ctrl-C stops the runs within one integrator step; the finished ones stay recorded
+    and `resume=True` runs the rest.
     """
     if jobs is None:
         jobs = 0

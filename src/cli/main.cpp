@@ -67,8 +67,8 @@ class ProgressObserver : public lash::Observer {
 std::atomic<int> g_interrupt{0};
 extern "C" void on_signal(int sig) { g_interrupt.store(sig); }
 
-/// SIGINT, SIGTERM and SIGHUP end the run at its next output, which then writes its summary and
-/// final state like any stopped run; a second signal ends the program at once. A signal the
+/// SIGINT, SIGTERM and SIGHUP end the run within one integrator step; it then writes its summary
+/// and final state like any stopped run; a second signal ends the program at once. A signal the
 /// parent ignores stays ignored (`nohup lash run ...` survives a closed terminal).
 void install_signal_handlers() {
   struct sigaction sa {};

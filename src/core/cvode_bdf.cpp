@@ -100,13 +100,18 @@ class CvodeBdf final : public Integrator {
     }
     double t_ret = t_;
     last_error_.clear();
-    const int flag = hook_ ? one_step_to(t_out, t_ret) : CVode(mem_, t_out, y_, &t_ret, CV_NORMAL);
+    const int flag =
+        hook_ || stop_ ? one_step_to(t_out, t_ret) : CVode(mem_, t_out, y_, &t_ret, CV_NORMAL);
     if (pending_) {  // the right-hand side threw (e.g. an ExpressionError): CVODE has stopped
       std::exception_ptr e = pending_;
       pending_ = nullptr;
       std::rethrow_exception(e);
     }
     for (int i = 0; i < p_.n; ++i) y[i] = NV_Ith_S(y_, i);
+    if (flag == kStopped) {
+      t_ = t_ret;
+      return {Advance::stopped, t_ret, {}};
+    }
     if (flag == CV_ROOT_RETURN) {
       ++events_;
       t_ = t_ret;
@@ -137,8 +142,11 @@ class CvodeBdf final : public Integrator {
   IntegratorStats stats() const override { return current(); }
 
  private:
-  /// CVode in CV_ONE_STEP mode, step by step up to t_out, calling the step hook after each
-  /// step: the steps are those of CV_NORMAL mode. A root located beyond t_out (one-step mode
+  /// one_step_to's return when the stop flag was raised (CVODE's own flags are 0..99 or < 0).
+  static constexpr int kStopped = 1000;
+
+  /// CVode in CV_ONE_STEP mode, step by step up to t_out, calling the step hook (if any) after
+  /// each step and checking the stop flag before each: the steps are those of CV_NORMAL mode. A root located beyond t_out (one-step mode
   /// searches the whole step) is kept and returned once t_out passes it, so that outputs and
   /// events come in time order as in CV_NORMAL mode. Returns CVode's flag; y_ holds the state
   /// at t_ret.
@@ -163,6 +171,11 @@ class CvodeBdf final : public Integrator {
         t_ret = t_out;
         return CV_SUCCESS;
       }
+      if (stop_requested()) {  // stop at the last step's end
+        if (t_step_ > t_) check(CVodeGetDky(mem_, t_step_, 0, y_), "CVodeGetDky");
+        t_ret = t_step_;
+        return kStopped;
+      }
       if (steps++ >= o_.max_steps) {
         char msg[160];
         std::snprintf(msg, sizeof msg,
@@ -180,13 +193,13 @@ class CvodeBdf final : public Integrator {
         return flag;
       }
       if (flag == CV_ROOT_RETURN) {
-        hook_(t0, t1);  // the step up to the root; what lies past it is integrated again
+        if (hook_) hook_(t0, t1);  // the step up to the root; what lies past it is integrated again
         root_pending_ = true;
         t_root_ = t1;
         continue;
       }
       t_step_ = t1;
-      hook_(t0, t1);
+      if (hook_) hook_(t0, t1);
     }
   }
 

@@ -76,6 +76,10 @@ class Dopri5 final : public Integrator {
       if (pending_event_) {  // the caller must reset() at the event first
         return {Advance::failure, t_, "internal: advance past an unhandled event"};
       }
+      if (stop_requested()) {
+        y = y_;
+        return {Advance::stopped, t_, {}};
+      }
       if (auto fail = step(); !fail.empty()) return {Advance::failure, t_, fail};
     }
   }

@@ -3,6 +3,7 @@
 /// The integrator interface the simulation loop drives: advance to an output time, stopping
 /// early at a located event (an event function rising through zero).
 #include <Eigen/Core>
+#include <atomic>
 #include <functional>
 #include <memory>
 #include <string>
@@ -36,8 +37,9 @@ struct IntegratorStats {
 
 /// Outcome of Integrator::advance.
 struct Advance {
-  enum Kind { reached, event, failure } kind = reached;
-  double t = 0.0;           ///< time reached (t_out, the located event, or the failure time)
+  /// stopped: the stop flag (set_stop_flag) was raised; y holds the last accepted step's end.
+  enum Kind { reached, event, failure, stopped } kind = reached;
+  double t = 0.0;           ///< time reached (t_out, the located event, the failure or stop time)
   std::string message;      ///< failure reason
 };
 
@@ -62,6 +64,10 @@ class Integrator {
   using StepHook = std::function<void(double t0, double t1)>;
   void set_step_hook(StepHook hook) { hook_ = std::move(hook); }
   bool has_step_hook() const { return static_cast<bool>(hook_); }
+  /// A flag checked before every step: once it is nonzero, advance() returns `stopped` at the
+  /// last accepted step instead of going on to t_out (a signal handler stores the signal there).
+  /// CVODE then steps in its one-step mode, which takes the same steps as its normal mode.
+  void set_stop_flag(const std::atomic<int>* flag) { stop_ = flag; }
   /// The state at t in the last accepted step [t0, t1], from the integrator's dense output
   /// (Dormand–Prince: its 4th-order continuous extension; CVODE: CVodeGetDky on its
   /// interpolating polynomial).
@@ -73,7 +79,9 @@ class Integrator {
   virtual const Eigen::VectorXd* evaluated_end() const { return nullptr; }
 
  protected:
+  bool stop_requested() const { return stop_ && stop_->load(std::memory_order_relaxed) != 0; }
   StepHook hook_;
+  const std::atomic<int>* stop_ = nullptr;
 };
 
 /// Dormand–Prince 5(4) with error control, 4th-order dense output (Hairer, Nørsett & Wanner,

@@ -168,6 +168,11 @@ void Simulator::resume(const State& state) {
 State Simulator::snapshot() const { return {t_, y_, ws_.contact, integrator_->step_hint()}; }
 
 // A function-try-block: an expression failing mid-run (ExpressionError) is a numerical failure.
+void Simulator::set_interrupt(const std::atomic<int>* flag) {
+  interrupt_ = flag;
+  integrator_->set_stop_flag(flag);
+}
+
 bool Simulator::advance_to(double t_target, Observer* observer) try {
   hook_steps(observer);
   while (t_ < t_target) {
@@ -184,6 +189,17 @@ bool Simulator::advance_to(double t_target, Observer* observer) try {
     }
     t_ = adv.t;
     y_ = y_try_;
+    if (adv.kind == Advance::stopped) {  // at a step's end, between outputs
+      evaluate(model_, ws_, t_, y_.data(), ydot_.data());
+      char at[64];
+      std::snprintf(at, sizeof at, "%.9g", t_);
+      status_ = {false, t_, "",
+                 "interrupted by signal " + std::to_string(interrupt_->load()) + " at t = " + at +
+                     " s, between outputs; results up to this time are kept, and "
+                     "final_state.json continues the run from there with --from",
+                 RunOutcome::interrupted};
+      return false;
+    }
     if (adv.kind == Advance::reached) {
       t_ = t_target;
       // Safety net: a crossing no event function saw (entered and left within one step, or lost
@@ -341,6 +357,7 @@ RunResult simulate(const Model& model, Workspace& ws, Observer& observer,
   const SolverSettings& s = model.solver;
   RunResult result;
   Simulator sim(model, ws, planes);
+  sim.set_interrupt(options.interrupt);
   result.integrator = sim.integrator_name();
   double t0 = 0.0;
   if (options.from) {
@@ -385,7 +402,9 @@ RunResult simulate(const Model& model, Workspace& ws, Observer& observer,
                                          describe_contacts(model, ws)};
     return finite;
   };
+  double t_emitted = -std::numeric_limits<double>::infinity();
   auto emit = [&](double t) -> bool {
+    t_emitted = t;
     const bool finite = evaluate_here(t);
     result.max_constraint_violation =
         std::max(result.max_constraint_violation, ws.constraint_violation);
@@ -411,6 +430,12 @@ RunResult simulate(const Model& model, Workspace& ws, Observer& observer,
     if (!sim.advance_to(target, &observer)) {
       result.status = sim.status();
       y = sim.state();
+      // Interrupted between outputs: the last row is the state the run stopped in (the one
+      // final_state.json holds), off the output grid.
+      if (result.status.outcome == RunOutcome::interrupted && sim.time() > t_emitted) {
+        const RunStatus stopped = result.status;
+        if (emit(sim.time())) result.status = stopped;
+      }
       break;
     }
     y = sim.state();

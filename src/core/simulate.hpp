@@ -118,8 +118,9 @@ struct RunOptions {
   /// Times (on the output grid) at which the integrator restarts as it does at an event; a run
   /// that stops at such a time and is continued with `from` gives bit-identical results.
   std::vector<double> restarts;
-  /// Checked at every output: when it holds a non-zero value (a signal number, set by a signal
-  /// handler), the run stops there as a failure "interrupted", keeping everything up to it.
+  /// Checked at every output and before every integrator step: when it holds a non-zero value
+  /// (a signal number, set by a signal handler), the run stops there, at most one step later,
+  /// with outcome interrupted, keeping everything up to it; final_state holds the state reached.
   const std::atomic<int>* interrupt = nullptr;
 };
 
@@ -138,8 +139,11 @@ class Simulator {
   State snapshot() const;
   /// Integrates to t_target, handling contact events and plane crossings (reported to
   /// `observer` when given: event() and section()).
-  /// Returns false on a numerical failure; status() says what happened.
+  /// Returns false on a numerical failure, or when the interrupt flag was raised (outcome
+  /// interrupted, at the last accepted step); status() says what happened.
   bool advance_to(double t_target, Observer* observer);
+  /// A flag (a signal number, 0: none) checked before every integrator step.
+  void set_interrupt(const std::atomic<int>* flag);
   double time() const { return t_; }
   const Eigen::VectorXd& state() const { return y_; }
   const RunStatus& status() const { return status_; }
@@ -160,6 +164,7 @@ class Simulator {
   double burst_t_ = -std::numeric_limits<double>::infinity();
   long burst_events_ = 0;
   RunStatus status_;
+  const std::atomic<int>* interrupt_ = nullptr;
 };
 
 /// Runs the model's solver settings from the initial-state rule to end_time.

@@ -95,7 +95,7 @@ class StudyFolder {
 
 /// Runs `folder`'s remaining runs on `jobs` threads (0: every core), each finished run written to
 /// the database by the calling thread and then passed to `on_record` (for a progress line).
-/// `interrupt` (a signal number once set) stops the runs at their next output; they are not
+/// `interrupt` (a signal number once set) stops the runs within one step; they are not
 /// recorded. Returns "" or the database error that stopped the study (the runs recorded before
 /// it stay; a failed CSV export is added to it). Writes runs.csv and sections.csv at the end.
 std::string run_study_threads(StudyFolder& folder, const StudySpec& spec, int jobs,

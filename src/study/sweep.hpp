@@ -113,8 +113,8 @@ State state_from_json(const nlohmann::json& j);
 RunRecord record_from_json(const nlohmann::json& j);
 
 /// Runs one point of the study. Never throws for a bad parameter combination or a failing run:
-/// the record says what happened. `interrupt` (a signal number when set) stops the run at its
-/// next output; the record is then "interrupted" and must not be kept.
+/// the record says what happened. `interrupt` (a signal number when set) stops the run within
+/// one integrator step; the record is then "interrupted" and must not be kept.
 /// With `previous` (a continuation study), the run starts from the previous run's final state:
 /// at the time t₀ = t₁·ω₁/ω where the constant-speed driver's angle is the one it ended at, its
 /// velocities projected onto the new speed's constraints, and runs for end_time from there.
