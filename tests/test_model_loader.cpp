@@ -295,9 +295,16 @@ TEST(ModelLoader, NonFiniteNumbersAndBadNamesAreRejected) {
   ASSERT_EQ(d.size(), 1u);
   EXPECT_EQ(d[0].str(), "model.yaml:2:10: model: 'gravity' must be a pair of finite numbers [x, y] "
                         "(m/s²), got [.nan, -9.81]");
-  d = problems(with("  slider: {mass", "  slider-1: {mass"));
-  ASSERT_GE(d.size(), 1u);
-  EXPECT_NE(d[0].message.find("a body name must be letters, digits and '_'"), std::string::npos);
+  for (const char* bad : {"  slider-1: {mass", "  9slider: {mass", "  slidé: {mass", "  s lider: {mass"}) {
+    d = problems(with("  slider: {mass", bad));
+    ASSERT_GE(d.size(), 1u) << bad;
+    EXPECT_NE(d[0].message.find("a body name must be letters, digits and '_'"), std::string::npos)
+        << bad;
+  }
+  // Names that are identifiers pass this check (the joints then name a body that is missing).
+  for (const char* good : {"  _slider_9: {mass", "  Z: {mass"})
+    for (const auto& p : problems(with("  slider: {mass", good)))
+      EXPECT_EQ(p.message.find("a body name must be"), std::string::npos) << good << ": " << p.message;
 }
 
 TEST(ModelLoader, PrescribedMotionMustDependOnTimeOnly) {
@@ -424,6 +431,15 @@ TEST(ModelLoader, DuplicateKeysAndNamesAreErrorsWithBothPlaces) {
   ASSERT_EQ(d.size(), 1u);
   EXPECT_EQ(d[0].line, 34);
   EXPECT_NE(d[0].message.find("duplicate key 'end_time' (first at line 33, column 3)"), std::string::npos);
+  // Several, in the file's order whatever their depth; a map reached twice through an alias is
+  // reported once.
+  d = problems("name: a\nbase: &b {x: 1, x: 2}\nother: *b\nname: c\n");
+  ASSERT_GE(d.size(), 2u);
+  EXPECT_EQ(d[0].str(), "model.yaml:2:17: duplicate key 'x' (first at line 2, column 11); each key "
+                        "and each element name may appear once in a map");
+  EXPECT_EQ(d[1].line, 4);
+  EXPECT_NE(d[1].message.find("duplicate key 'name' (first at line 1, column 1)"), std::string::npos);
+  if (d.size() > 2) EXPECT_EQ(d[2].message.find("duplicate key"), std::string::npos) << d[2].str();
 }
 
 TEST(ModelLoader, TextMustBeUtf8AndOneDocument) {
@@ -443,6 +459,24 @@ TEST(ModelLoader, TextMustBeUtf8AndOneDocument) {
   ASSERT_EQ(d.size(), 1u);
   EXPECT_EQ(d[0].line, 35);  // the "---"
   EXPECT_NE(d[0].message.find("a second YAML document"), std::string::npos);
+  d = problems(std::string(kGood) + "...\n---\nname: other\n");
+  ASSERT_EQ(d.size(), 1u);
+  EXPECT_NE(d[0].message.find("a second YAML document"), std::string::npos);
+  // One document with its markers, and "---" inside a block scalar, are one model.
+  EXPECT_TRUE(problems("--- # the model\n" + std::string(kGood) + "...\n").empty());
+  EXPECT_TRUE(problems(with("name: t\n", "name: t\ndescription: |\n  ---\n  ...\n")).empty());
+}
+
+TEST(ModelLoader, TheModelAsRunIsTheFileTextUnlessOverridden) {
+  // Without overrides model_resolved.yaml is the file itself, comments kept; with one, the model
+  // after it, emitted again from the tree.
+  const std::string text = std::string(kGood) + "# a closing comment\n";
+  const LoadedModel plain = load_model_text(text, "model.yaml");
+  EXPECT_EQ(plain.resolved_yaml + "\n", text);
+  const LoadedModel set = load_model_text(text, "model.yaml", {"solver.end_time=0.5"});
+  EXPECT_EQ(set.resolved_yaml.find("# a closing comment"), std::string::npos);
+  EXPECT_NE(set.resolved_yaml.find("end_time: 0.5"), std::string::npos) << set.resolved_yaml;
+  EXPECT_EQ(load_model_text(set.resolved_yaml, "again.yaml").model.solver.end_time, 0.5);
 }
 
 TEST(ModelLoader, TheNumberOfOutputsIsBoundedBeforeRunning) {

@@ -11,6 +11,7 @@
 #include <Eigen/Core>
 #include <array>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -80,7 +81,7 @@ struct Workspace {
 
   // Expressions, compiled against `vars` (a moved workspace keeps them bound: expression.hpp).
   ExpressionVariables vars;
-  std::vector<Expression> driver_expr;              ///< per driver (or empty slot)
+  std::vector<std::optional<Expression>> driver_expr;  ///< per driver; none at constant speed
   std::vector<std::vector<Expression>> load_expr;   ///< per load: fx, fy or torque
   bool loads_use_state = false;
 

@@ -12,8 +12,10 @@
 #include <fstream>
 #include <functional>
 #include <map>
+#include <tuple>
+#include <algorithm>
+#include <set>
 #include <optional>
-#include <regex>
 #include <sstream>
 #include <string_view>
 
@@ -151,6 +153,16 @@ class Section {
   std::string element_;
   std::vector<std::string> allowed_;
 };
+
+/// [A-Za-z_][A-Za-z0-9_]*: a name expressions can use (std::regex would compile a pattern per
+/// body, about half a million instructions each).
+bool is_identifier(const std::string& s) {
+  auto letter = [](char c) { return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || c == '_'; };
+  if (s.empty() || !letter(s[0])) return false;
+  for (char c : s)
+    if (!letter(c) && !(c >= '0' && c <= '9')) return false;
+  return true;
+}
 
 // Checks used with Section::number.
 std::string positive(double v) { return v > 0 ? "" : "> 0"; }
@@ -323,7 +335,7 @@ class Loader {
                 {"mass", "inertia", "position", "angle", "angle_deg", "velocity",
                  "angular_velocity", "markers", "flexible"});
       if (name == "ground") r_.error(kv.first, s.element(), "'ground' is reserved; rename the body");
-      if (!std::regex_match(name, std::regex("[A-Za-z_][A-Za-z0-9_]*")))
+      if (!is_identifier(name))
         r_.error(kv.first, s.element(),
                  "a body name must be letters, digits and '_', starting with a letter or '_' "
                  "(it is used in expressions as <body>.x), got '" + name + "'");
@@ -1123,79 +1135,94 @@ void apply_override(YAML::Node root, const std::string& spec, Reporter& r) {
 /// Every key that appears twice in one map, with both places (yaml-cpp keeps both, and a lookup
 /// would silently take the first). Read from the parser's events, where an alias is one event:
 /// no node is visited twice, so self-referencing and exponential aliases cost nothing.
-class DuplicateKeyFinder : public YAML::EventHandler {
+/// Counts the documents of a YAML stream (and where the second starts); ignores their content.
+class DocumentCounter : public YAML::EventHandler {
  public:
-  explicit DuplicateKeyFinder(Reporter& r) : r_(r) {}
   int documents = 0;
-  YAML::Mark second_document;  ///< where the second document starts, if there is one
+  YAML::Mark second_document;
   void OnDocumentStart(const YAML::Mark& m) override {
     if (++documents == 2) second_document = m;
   }
   void OnDocumentEnd() override {}
-  void OnNull(const YAML::Mark& m, YAML::anchor_t) override { done(m, nullptr); }
-  void OnAlias(const YAML::Mark& m, YAML::anchor_t) override { done(m, nullptr); }
-  void OnScalar(const YAML::Mark& m, const std::string&, YAML::anchor_t,
-                const std::string& value) override {
-    done(m, &value);
-  }
-  void OnSequenceStart(const YAML::Mark& m, const std::string&, YAML::anchor_t,
-                       YAML::EmitterStyle::value) override {
-    stack_.push_back({false, true, m, {}});
-  }
-  void OnSequenceEnd() override { close(); }
-  void OnMapStart(const YAML::Mark& m, const std::string&, YAML::anchor_t,
-                  YAML::EmitterStyle::value) override {
-    stack_.push_back({true, true, m, {}});
-  }
-  void OnMapEnd() override { close(); }
-
- private:
-  struct Frame {
-    bool is_map;
-    bool expect_key;
-    YAML::Mark start;
-    std::map<std::string, YAML::Mark> keys;
-  };
-  void close() {
-    const YAML::Mark m = stack_.back().start;
-    stack_.pop_back();
-    done(m, nullptr);
-  }
-  /// A node ended at `m`; `key` is its text when it is a scalar.
-  void done(const YAML::Mark& m, const std::string* key) {
-    if (documents > 1 || stack_.empty() || !stack_.back().is_map) return;
-    Frame& f = stack_.back();
-    if (f.expect_key && key) {
-      const auto [it, fresh] = f.keys.emplace(*key, m);
-      if (!fresh)
-        r_.list.push_back({r_.file, m.line + 1, m.column + 1, "",
-                           "duplicate key '" + *key + "' (first at line " +
-                               std::to_string(it->second.line + 1) + ", column " +
-                               std::to_string(it->second.column + 1) +
-                               "); each key and each element name may appear once in a map"});
-    }
-    f.expect_key = !f.expect_key;
-  }
-  Reporter& r_;
-  std::vector<Frame> stack_;
+  void OnNull(const YAML::Mark&, YAML::anchor_t) override {}
+  void OnAlias(const YAML::Mark&, YAML::anchor_t) override {}
+  void OnScalar(const YAML::Mark&, const std::string&, YAML::anchor_t, const std::string&) override {}
+  void OnSequenceStart(const YAML::Mark&, const std::string&, YAML::anchor_t,
+                       YAML::EmitterStyle::value) override {}
+  void OnSequenceEnd() override {}
+  void OnMapStart(const YAML::Mark&, const std::string&, YAML::anchor_t,
+                  YAML::EmitterStyle::value) override {}
+  void OnMapEnd() override {}
 };
 
-/// Checks the structure yaml-cpp's Load does not: no key twice in a map of the first document,
-/// and no second document. At most two documents are read: on some malformed inputs yaml-cpp's
-/// parser returns empty documents forever (which is why YAML::LoadAll is not used).
-void check_documents(const std::string& text, Reporter& r) {
+/// Whether `text` has a line that starts with a document marker ("---" or "...", then a blank
+/// or the line's end). Without one a YAML stream holds a single document.
+bool has_document_marker(std::string_view text) {
+  for (std::size_t at = 0; at < text.size();) {
+    const std::string_view line = text.substr(at, 4);
+    if ((line.substr(0, 3) == "---" || line.substr(0, 3) == "...") &&
+        (line.size() == 3 || line[3] == ' ' || line[3] == '\t' || line[3] == '\r' || line[3] == '\n'))
+      return true;
+    const std::size_t eol = text.find('\n', at);
+    if (eol == std::string_view::npos) break;
+    at = eol + 1;
+  }
+  return false;
+}
+
+/// Checks the structure yaml-cpp's Load does not: no key twice in a map of `root` (Load keeps
+/// both entries, and node[key] would see only the first), and no second document in `text`
+/// (Load reads the first only). Duplicates are found by walking the loaded tree, a collection
+/// reached again through an alias once; the stream is parsed a second time only when it has a
+/// document marker, and then at most two documents are read (on some malformed inputs
+/// yaml-cpp's parser returns empty documents forever, which is why YAML::LoadAll is not used).
+void check_structure(const std::string& text, const YAML::Node& root, Reporter& r) {
+  std::vector<Diagnostic> found;
+  std::vector<YAML::Node> todo{root};
+  std::set<std::size_t> walked;  // collections, by their offset in the text
+  while (!todo.empty()) {
+    const YAML::Node n = todo.back();
+    todo.pop_back();
+    if (!n.IsMap() && !n.IsSequence()) continue;
+    if (!walked.insert(static_cast<std::size_t>(n.Mark().pos)).second) continue;
+    std::map<std::string, YAML::Mark> keys;
+    for (auto it = n.begin(); it != n.end(); ++it) {
+      if (n.IsSequence()) {
+        todo.push_back(*it);
+        continue;
+      }
+      const YAML::Node key = it->first;
+      if (key.IsScalar()) {
+        const YAML::Mark m = key.Mark();
+        const auto [first, fresh] = keys.emplace(key.Scalar(), m);
+        if (!fresh)
+          found.push_back({r.file, m.line + 1, m.column + 1, "",
+                           "duplicate key '" + key.Scalar() + "' (first at line " +
+                               std::to_string(first->second.line + 1) + ", column " +
+                               std::to_string(first->second.column + 1) +
+                               "); each key and each element name may appear once in a map"});
+      }
+      todo.push_back(key);
+      todo.push_back(it->second);
+    }
+  }
+  std::sort(found.begin(), found.end(), [](const Diagnostic& a, const Diagnostic& b) {
+    return std::tie(a.line, a.column) < std::tie(b.line, b.column);
+  });
+  r.list.insert(r.list.end(), found.begin(), found.end());
+  if (!has_document_marker(text)) return;
   std::istringstream in(text);
   YAML::Parser parser(in);
-  DuplicateKeyFinder finder(r);
+  DocumentCounter counter;
   try {
-    for (int k = 0; k < 2 && parser.HandleNextDocument(finder); ++k) {
+    for (int k = 0; k < 2 && parser.HandleNextDocument(counter); ++k) {
     }
   } catch (const YAML::Exception&) {
     // a syntax error after the first document: reported below as a second document
-    if (finder.documents < 2) finder.documents = 2, finder.second_document = YAML::Mark::null_mark();
+    if (counter.documents < 2) counter.documents = 2, counter.second_document = YAML::Mark::null_mark();
   }
-  if (finder.documents > 1) {
-    const YAML::Mark& m = finder.second_document;
+  if (counter.documents > 1) {
+    const YAML::Mark& m = counter.second_document;
     r.list.push_back({r.file, m.line >= 0 ? m.line + 1 : 0, m.line >= 0 ? m.column + 1 : 0, "",
                       "a second YAML document ('---'): a model file holds one model; split it "
                       "into two files"});
@@ -1249,7 +1276,7 @@ LoadedModel load_root(YAML::Node root, const std::string& filename,
   out.model = loader.load(root);
   out.output = loader.output();
   out.model.source = filename;
-  out.resolved_yaml = YAML::Dump(root);
+  if (!overrides.empty()) out.resolved_yaml = YAML::Dump(root);
   return out;
 }
 
@@ -1282,16 +1309,27 @@ LoadedModel load_model_text(const std::string& text, const std::string& filename
   {
     Reporter structure;
     structure.file = filename;
-    check_documents(text, structure);
+    check_structure(text, root, structure);
     if (!structure.list.empty()) throw ModelError(structure.list);
   }
-  return load_root(root, filename, overrides);
+  LoadedModel out = load_root(root, filename, overrides);
+  // Without overrides the model as run is the file's text (comments kept); with them, the tree
+  // after them, emitted again. (Emitting costs as much as parsing: ~2 M instructions.)
+  if (overrides.empty())
+    out.resolved_yaml = !text.empty() && text.back() == '\n' ? text.substr(0, text.size() - 1) : text;
+  return out;
 }
 
 std::vector<Diagnostic> yaml_structure_problems(const std::string& text, const std::string& filename) {
   Reporter r;
   r.file = filename;
-  check_documents(text, r);
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::Exception&) {
+    return {};  // not YAML at all: the caller's own YAML::Load says where
+  }
+  check_structure(text, root, r);
   return r.list;
 }
 

@@ -29,13 +29,13 @@ void driver_motion(const Model& model, const Workspace& ws, int d, double t, con
       break;
     case DriverProfile::position: {
       double v[3];  // f, ḟ, f̈
-      ws.driver_expr[d].eval_derivatives(t, v);
+      ws.driver_expr[d]->eval_derivatives(t, v);
       f = v[0], fd = v[1], fdd = v[2];
       break;
     }
     case DriverProfile::speed: {
       double v[2];  // ḟ, f̈
-      ws.driver_expr[d].eval_derivatives(t, v);
+      ws.driver_expr[d]->eval_derivatives(t, v);
       fd = v[0], fdd = v[1];
       f = y[ws.aux_driver[d]];
       break;
