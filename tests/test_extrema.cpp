@@ -211,6 +211,30 @@ TEST(Extrema, AWindowCountsItsEndsAndRefinesInsideItOnly) {
   EXPECT_LT(a.max, 3.0);
 }
 
+TEST(Extrema, NothingPastTheEndTimeCounts) {
+  // The integrator's last step passes end_time and the last output is interpolated back to it;
+  // the state at that step's end is not part of the run. Over exactly one crank turn the crank
+  // angle (driven, rising) peaks at 2π at end_time, and the dissipated energy (never falling)
+  // peaks at the last output's value. Before the fix both were taken 2 µs past the end.
+  for (const char* integrator : {"dopri5", "bdf"}) {
+    SCOPED_TRACE(integrator);
+    const PeakRun r = run_peaks("flores_slider_crank.yaml",
+                                {"solver.end_time=0.012", "solver.output_interval=1e-4",
+                                 std::string("solver.integrator=") + integrator});
+    ASSERT_TRUE(r.result.status.ok) << r.result.status.message;
+    for (const auto& e : r.obs->tracked.extrema()) {
+      EXPECT_LE(e.t_max, 0.012);
+      EXPECT_LE(e.t_min, 0.012);
+    }
+    const ChannelExtremum& phi = r.tracked("crank.phi");
+    EXPECT_NEAR(phi.max, 2 * M_PI, 1e-9);
+    EXPECT_EQ(phi.t_max, 0.012);
+    const ChannelExtremum& dissipated = r.tracked("energy.dissipated");
+    EXPECT_EQ(dissipated.max, r.sampled("energy.dissipated").max);
+    EXPECT_EQ(dissipated.t_max, 0.012);
+  }
+}
+
 TEST(Extrema, TurningPointsBelowTheIntegratorsResolutionAreNotSearched) {
   // The Flores example over one revolution, tracked twice in one run: as the results writer
   // does (a turning point is searched only where it rises above the step's ends by more than

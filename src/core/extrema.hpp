@@ -4,6 +4,7 @@
 /// output, every accepted integrator step and every located event, and refined inside a step on
 /// the integrator's dense output where a channel turns (docs/analysis.md, "How peaks are found").
 #include <Eigen/Core>
+#include <algorithm>
 #include <limits>
 #include <vector>
 
@@ -45,10 +46,12 @@ class ChannelExtrema {
 
   explicit ChannelExtrema(const Model& model);
 
-  /// Only values at times in [from, to] count (default: every time). A step across an end
-  /// samples the end itself and refines inside the window only, so the extrema over the window
-  /// are as exact as over a whole run.
-  void set_window(double from, double to) { from_ = from, to_ = to; }
+  /// Only values at times in [from, to] count (default: up to the model's end_time; `to` is
+  /// never later). A step across an end samples the end itself and refines inside the window
+  /// only, so the extrema over the window are as exact as over a whole run. (The integrator's
+  /// last step usually passes end_time, and the outputs are interpolated back to it: what lies
+  /// past it is not part of the run.)
+  void set_window(double from, double to) { from_ = from, to_ = std::min(to, end_); }
   /// The relative resolution below which a turning point is not searched (default: the model's
   /// rtol; 0 searches every one that may beat the extremum found so far).
   void set_resolution(double relative) { resolution_ = relative; }
@@ -82,7 +85,8 @@ class ChannelExtrema {
   std::vector<double> v0_, d0_, v1_, d1_, tmp_;
   double t_last_ = 0.0;
   double from_ = -std::numeric_limits<double>::infinity();
-  double to_ = std::numeric_limits<double>::infinity();
+  double end_;  ///< the model's end_time
+  double to_;
   bool have_slope_ = false;
   long refinements_ = 0, evaluations_ = 0;
 };
