@@ -418,6 +418,21 @@ solver: {end_time: 1}
   const auto d = problems(yaml);
   ASSERT_EQ(d.size(), 1u);
   EXPECT_EQ(d[0].str(), "model.yaml:5:10: load 'twist': body 'bob' is a point mass: it takes no torque");
+  // A torsional spring from a body to itself would act on nothing yet count its energy, as a
+  // spring or a bushing would: refused like them.
+  const std::string pivot = R"(name: pivot_on_itself
+bodies:
+  bar: {mass: 1, inertia: 0.1}
+joints:
+  hinge: {type: revolute, journal: bar, bearing: ground}
+loads:
+  pivot: {type: torsional_spring_damper, bodies: [bar, bar], stiffness: 5, free_angle: 0.5}
+solver: {end_time: 1}
+)";
+  const auto p = problems(pivot);
+  ASSERT_EQ(p.size(), 1u);
+  EXPECT_EQ(p[0].str(), "model.yaml:7:10: load 'pivot': both ends are on body 'bar'; a torsional "
+                        "spring acts between two bodies");
 }
 
 TEST(ModelLoader, DuplicateKeysAndNamesAreErrorsWithBothPlaces) {

@@ -254,6 +254,9 @@ class Checker {
         break;
       case LoadType::torsional_spring_damper:
         if (!valid_body(l.body_a) || !valid_body(l.body_b)) return error(el, "body out of range");
+        if (l.body_a == l.body_b)
+          return error(el, "both ends are on body '" + body_name(l.body_a) +
+                               "'; a torsional spring acts between two bodies");
         if (!has_angle(l.body_a) || !has_angle(l.body_b))
           error(el, "a torsional spring needs two rotating bodies (a point mass has no angle)");
         if (std::isnan(l.angle0))
