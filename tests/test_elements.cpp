@@ -404,6 +404,56 @@ TEST(State, AStateOfAnotherModelIsRefusedWithWhatDiffers) {
   std::filesystem::remove(path);
 }
 
+TEST(State, AClearanceJointsPartThatCannotBeIsRefusedAndAChangedGapIsSaid) {
+  // The Flores run ends in contact at 6 ms; its state file records the gap (4 µm).
+  Model m = load_model_file(example_path("flores_slider_crank.yaml"), {"solver.end_time=0.006"}).model;
+  Workspace ws(m);
+  Recorder r(m);
+  const RunResult first = simulate(m, ws, r);
+  ASSERT_TRUE(first.status.ok);
+  const std::string path = ::testing::TempDir() + "lash_state_gaps.json";
+  write_state(path, m, ws, first.final_state);
+  const State saved = read_state(path, m, ws);
+  std::filesystem::remove(path);
+  ASSERT_EQ(saved.gaps.size(), 1u);
+  EXPECT_GT(saved.gaps[0], 0.0);  // in contact
+  // Continued to 7 ms under the same model: nothing to say.
+  Model next = load_model_file(example_path("flores_slider_crank.yaml"), {"solver.end_time=0.007"}).model;
+  Workspace wn(next);
+  EXPECT_EQ(resume_problem(next, wn, saved), "");
+  EXPECT_TRUE(resume_warnings(next, wn, saved).empty());
+  // The slider 5 m away along its guide: the ideal joints hold, the journal cannot be there.
+  const int slider = 2;
+  State far = saved;
+  far.y[ws.blocks[slider].offset] = 5.0;  // its x
+  EXPECT_NE(resume_problem(next, wn, far).find("joint 'rod_slider': the journal lies 4.9"),
+            std::string::npos)
+      << resume_problem(next, wn, far);
+  // A step no integrator can take at t = 6 ms.
+  State tiny = saved;
+  tiny.step = 1e-300;
+  EXPECT_NE(resume_problem(next, wn, tiny).find("below the smallest step"), std::string::npos);
+  // The same state under a clearance of 0.1 mm instead of 0.5: the journal now starts 0.4 mm
+  // inside the wall. Allowed (a continuation may change the clearance), and said.
+  Model tighter = load_model_file(example_path("flores_slider_crank.yaml"),
+                                  {"solver.end_time=0.007", "joints.rod_slider.clearance=0.1e-3"})
+                      .model;
+  Workspace wt(tighter);
+  EXPECT_EQ(resume_problem(tighter, wt, saved), "");
+  Recorder rt(tighter);
+  RunOptions from;
+  from.from = &saved;
+  const RunResult cont = simulate(tighter, wt, rt, {}, {}, from);
+  ASSERT_EQ(cont.warnings.size(), 1u);
+  EXPECT_NE(cont.warnings[0].find("joint 'rod_slider': the continued state's gap is 0.000404"),
+            std::string::npos)
+      << cont.warnings[0];
+  // Without saved gaps (an older state file, or a state kept in memory) nothing is said.
+  State unsaved = saved;
+  unsaved.gaps.clear();
+  EXPECT_TRUE(resume_warnings(tighter, wt, unsaved).empty());
+}
+
 TEST(Finalize, ChecksModelsBuiltInCode) {
   Model m;
   m.name = "code";

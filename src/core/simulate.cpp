@@ -347,7 +347,48 @@ std::string resume_problem(const Model& model, Workspace& ws, const State& state
       << model.solver.end_time << " s; raise it with --set solver.end_time=...";
     return s.str();
   }
-  return constraint_problem(model, ws, state.t, state.y, true);
+  // The integrators' smallest step at t (DOPRI5's underflow bound; 0 lets them choose).
+  if (state.step > 0.0 &&
+      state.step < 16.0 * std::numeric_limits<double>::epsilon() * std::max(1.0, std::abs(state.t))) {
+    s << "the step size " << state.step << " s is below the smallest step an integrator can take "
+      << "at t = " << state.t << " s (set \"step\": 0 to let it choose)";
+    return s.str();
+  }
+  if (std::string bad = constraint_problem(model, ws, state.t, state.y, true); !bad.empty())
+    return bad;
+  for (int c = 0; c < ws.nc; ++c) {
+    const Joint& j = model.joints[ws.clearance_joints[c]];
+    double delta, delta_dot;
+    clearance_gap(model, ws, c, state.y.data(), delta, delta_dot);
+    if (delta > j.clearance->journal_radius) {
+      s << "joint '" << j.name << "': the journal lies " << delta << " m into its bearing's wall, "
+        << "more than its own radius " << j.clearance->journal_radius
+        << " m: the state does not fit this joint (written with another clearance or geometry?)";
+      return s.str();
+    }
+  }
+  return "";
+}
+
+std::vector<std::string> resume_warnings(const Model& model, Workspace& ws, const State& state) {
+  std::vector<std::string> out;
+  if (static_cast<int>(state.gaps.size()) != ws.nc) return out;
+  for (int c = 0; c < ws.nc; ++c) {
+    const Joint& j = model.joints[ws.clearance_joints[c]];
+    double delta, delta_dot;
+    clearance_gap(model, ws, c, state.y.data(), delta, delta_dot);
+    const double saved = state.gaps[c];
+    if (std::abs(delta - saved) <= 1e-9 + 1e-6 * j.clearance->clearance) continue;
+    char msg[400];
+    std::snprintf(msg, sizeof msg,
+                  "joint '%s': the continued state's gap is %.6g m under this model but was "
+                  "%.6g m when it was saved (the clearance or the geometry changed); the run "
+                  "starts from that gap%s",
+                  j.name.c_str(), delta, saved,
+                  delta > 0.0 ? ", with the contact force of that penetration" : "");
+    out.push_back(msg);
+  }
+  return out;
 }
 
 RunResult simulate(const Model& model, Workspace& ws, Observer& observer,
@@ -371,6 +412,8 @@ RunResult simulate(const Model& model, Workspace& ws, Observer& observer,
   Eigen::VectorXd y = sim.state();
   Eigen::VectorXd ydot(ws.ny);
   result.warnings = ws.warnings;
+  if (options.from)
+    for (auto& w : resume_warnings(model, ws, *options.from)) result.warnings.push_back(std::move(w));
 
   // Outputs at k·interval on one global grid (so a continued run lands on the same times), and
   // at end_time when it is not a multiple of the interval; stroboscopic sections merged in.

@@ -25,6 +25,9 @@ struct State {
   Eigen::VectorXd y;
   std::vector<ContactState> modes;  ///< per clearance joint
   double step = 0.0;                ///< next step size to try, s (0: the integrator chooses)
+  /// Per clearance joint, its gap δ (m) when the state was saved, if the state file says
+  /// (empty otherwise): continuing under another clearance or geometry is then said.
+  std::vector<double> gaps;
 };
 
 /// A located contact onset or separation of one clearance joint.
@@ -177,9 +180,16 @@ RunResult simulate(const Model& model, Workspace& ws, Observer& observer,
 std::string state_mismatch(const Workspace& ws, const State& state);
 
 /// Why a run cannot continue from `state`: a layout that differs, a time before 0 or not before
-/// end_time, redundant joints and drivers, or constraint residuals beyond
-/// kStateTolerance* (a state of a model with other joints, markers or driver motion). "" if it can.
+/// end_time, a step size below what the integrator can take there, redundant joints and
+/// drivers, constraint residuals beyond kStateTolerance* (a state of a model with other joints,
+/// markers or driver motion), or a journal deeper in its bearing's wall than its own radius.
+/// "" if it can.
 std::string resume_problem(const Model& model, Workspace& ws, const State& state);
+
+/// What is odd but allowed in continuing from `state`: a clearance joint whose gap differs from
+/// the one saved with the state (the model's clearance or geometry changed since), with the
+/// contact force it then starts with.
+std::vector<std::string> resume_warnings(const Model& model, Workspace& ws, const State& state);
 
 /// Parses "<body>.<x|y|phi|vx|vy|omega>=VALUE[,down]" into a plane; throws
 /// std::invalid_argument naming what is wrong.

@@ -1,5 +1,6 @@
 #include "io/state_file.hpp"
 
+#include "core/elements/clearance_revolute.hpp"
 #include "io/files.hpp"
 
 #include <cmath>
@@ -29,6 +30,15 @@ void write_state(const std::string& path, const Model& model, const Workspace& w
   for (int k = 0; k < ws.nc; ++k)
     modes[model.joints[ws.clearance_joints[k]].name] = state.modes[k].in_contact ? 1 : 0;
   j["modes"] = modes;
+  // Each clearance joint's gap δ (m) as saved: a run continued under another clearance or
+  // geometry is then told so (resume_warnings).
+  json gaps = json::object();
+  for (int k = 0; k < ws.nc; ++k) {
+    double delta, delta_dot;
+    clearance_gap(model, ws, k, state.y.data(), delta, delta_dot);
+    gaps[model.joints[ws.clearance_joints[k]].name] = delta;
+  }
+  j["gaps"] = gaps;
   write_file_atomic(path, j.dump(1, ' ', false, json::error_handler_t::replace) + "\n");
 }
 
@@ -86,6 +96,20 @@ State read_state(const std::string& path, const Model& model, const Workspace& w
         throw fail("the contact mode of clearance joint '" + name +
                    "' must be 1 (contact) or 0 (free flight), got " + mode.dump());
       st.modes.push_back({mode.get<int>() == 1});
+    }
+    if (j.contains("gaps")) {  // optional (older state files have none)
+      const json& gaps = j.at("gaps");
+      if (!gaps.is_object()) throw fail("'gaps' must map each clearance joint to its gap (m)");
+      for (int k = 0; k < ws.nc; ++k) {
+        const std::string& name = model.joints[ws.clearance_joints[k]].name;
+        if (!gaps.contains(name)) break;  // another set of joints: the modes say what differs
+        const json& g = gaps.at(name);
+        if (!g.is_number() || !std::isfinite(g.get<double>()))
+          throw fail("the gap of clearance joint '" + name + "' must be a finite number (m), got " +
+                     g.dump());
+        st.gaps.push_back(g.get<double>());
+      }
+      if (static_cast<int>(st.gaps.size()) != ws.nc) st.gaps.clear();
     }
     if (static_cast<int>(modes.size()) != ws.nc)
       throw fail("the state has " + std::to_string(modes.size()) +
