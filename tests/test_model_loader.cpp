@@ -435,6 +435,41 @@ solver: {end_time: 1}
                         "spring acts between two bodies");
 }
 
+TEST(ModelLoader, ChannelClashesPointAtTheElementAndNameBothOwners) {
+  // A joint and a load named 'hang' (both write hang.Fx, .Fy, .F); a sensor whose mass adds a
+  // point mass 'probe_mass' and a joint 'probe_mount' beside a body and a joint of those names.
+  const std::string yaml = R"(name: clash
+ground: {markers: {O: [0, 0]}}
+bodies:
+  am: {mass: 0.5, position: [0.3, 0.1]}
+  probe_mass: {mass: 1.0, position: [1, 0]}
+joints:
+  hang: {type: distance, from: ground.O, to: am}
+  probe_mount: {type: distance, from: ground.O, to: probe_mass}
+loads:
+  hang: {type: spring_damper, from: ground.O, to: am, stiffness: 5}
+sensors:
+  probe: {type: accelerometer, at: am, mass: 0.01}
+solver: {end_time: 0.1}
+)";
+  const auto d = problems(yaml);
+  ASSERT_EQ(d.size(), 3u);  // one a clash, not one a channel
+  EXPECT_EQ(d[0].str(), "model.yaml:10:9: load 'hang': load 'hang' writes 'hang.Fx', 'hang.Fy', "
+                        "'hang.F', as joint 'hang' does; elements may share a name only when their "
+                        "channels differ: rename one of them");
+  EXPECT_EQ(d[1].line, 12);
+  EXPECT_NE(d[1].message.find("the point mass 'probe_mass' added by sensor 'probe' (its mass) "
+                              "writes 'probe_mass.x', 'probe_mass.y', 'probe_mass.vx' and 3 more, "
+                              "as body 'probe_mass' does"),
+            std::string::npos)
+      << d[1].message;
+  EXPECT_EQ(d[2].line, 12);
+  EXPECT_NE(d[2].message.find("the joint 'probe_mount' added by sensor 'probe' (its mass) writes "
+                              "'probe_mount.Fx'"),
+            std::string::npos)
+      << d[2].message;
+}
+
 TEST(ModelLoader, DuplicateKeysAndNamesAreErrorsWithBothPlaces) {
   // Two joints named `pin`: yaml-cpp keeps both, a lookup would take the first silently.
   auto d = problems(with("  guide: {type", "  pin: {type: revolute, journal: rod.B, bearing: slider}\n  guide: {type"));

@@ -1,5 +1,6 @@
 #include "core/finalize.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <set>
@@ -322,6 +323,73 @@ class Checker {
 
 }  // namespace
 
+namespace {
+
+/// One problem per name whose channels clash, at the element written later in the file (or the
+/// sensor whose mass adds it), naming every element of that name and the channels in question.
+std::vector<ModelProblem> name_clashes(const Model& model,
+                                       const std::map<std::string, std::vector<std::string>>& twice) {
+  // The sensor whose `mass` added a point mass `<sensor>_mass` and its joint `<sensor>_mount`.
+  auto added_by = [&](const std::string& name, const char* suffix) -> const Sensor* {
+    for (const Sensor& sn : model.sensors)
+      if (sn.mass > 0 && name == sn.name + suffix) return &sn;
+    return nullptr;
+  };
+  struct Owner {
+    std::string element;  ///< where the message points: "load 'hang'", "sensor 'probe'"
+    std::string what;     ///< how the message names it
+  };
+  std::vector<ModelProblem> out;
+  for (const auto& [name, channels] : twice) {
+    std::vector<Owner> owners;
+    // Generated elements come after the file's own (finalize appends them): the last body or
+    // joint of a generated name is the generated one.
+    auto add = [&](const char* kind, const std::vector<std::string>& names, const char* suffix,
+                   const char* added) {
+      const Sensor* sn = added_by(name, suffix);
+      const auto last = std::find(names.rbegin(), names.rend(), name);
+      for (auto it = names.begin(); it != names.end(); ++it) {
+        if (*it != name) continue;
+        if (sn && last != names.rend() && &*it == &*last)
+          owners.push_back({"sensor '" + sn->name + "'", std::string(added) + " '" + name +
+                                                             "' added by sensor '" + sn->name +
+                                                             "' (its mass)"});
+        else
+          owners.push_back({std::string(kind) + " '" + name + "'", std::string(kind) + " '" + name + "'"});
+      }
+    };
+    std::vector<std::string> bodies, joints;
+    for (const Body& b : model.bodies) bodies.push_back(b.name);
+    for (const Joint& j : model.joints) joints.push_back(j.name);
+    add("body", bodies, "_mass", "the point mass");
+    add("joint", joints, "_mount", "the joint");
+    for (const Driver& d : model.drivers)
+      if (d.name == name) owners.push_back({"driver '" + name + "'", "driver '" + name + "'"});
+    for (const Load& l : model.loads)
+      if (l.name == name) owners.push_back({"load '" + name + "'", "load '" + name + "'"});
+    for (const Sensor& sn : model.sensors)
+      if (sn.name == name) owners.push_back({"sensor '" + name + "'", "sensor '" + name + "'"});
+    if (name == "energy" || name == "constraint")
+      owners.insert(owners.begin(), {"model", "the model's own " + name + " channels"});
+    std::string list;
+    for (size_t i = 0; i < channels.size() && i < 3; ++i)
+      list += (i ? ", '" : "'") + channels[i] + "'";
+    if (channels.size() > 3) list += " and " + std::to_string(channels.size() - 3) + " more";
+    std::string others;
+    for (size_t i = 0; i + 1 < owners.size(); ++i)
+      others += (i ? " and " : "") + owners[i].what;
+    const Owner& last = owners.empty() ? Owner{"model", "an element"} : owners.back();
+    out.push_back({last.element, (owners.size() > 1 ? last.what + " writes " : "channels ") + list +
+                                     (owners.size() > 1 ? ", as " + others + " does"
+                                                        : " are written twice") +
+                                     "; elements may share a name only when their channels "
+                                     "differ: rename one of them"});
+  }
+  return out;
+}
+
+}  // namespace
+
 InvalidModel::InvalidModel(std::vector<ModelProblem> problems)
     : std::invalid_argument(join_problems(problems)), problems_(std::move(problems)) {}
 
@@ -331,16 +399,12 @@ void finalize(Model& model) {
   model.finalized = true;
   // Two elements of different kinds may share a name, but not a channel.
   std::map<std::string, int> seen;
-  std::vector<ModelProblem> clashes;
+  std::map<std::string, std::vector<std::string>> twice;  // element name -> channels written twice
   for (const auto& c : channel_info(model, Workspace(model)))
-    if (++seen[c.name] == 2)
-      clashes.push_back({"model", "two elements named '" + c.name.substr(0, c.name.rfind('.')) +
-                                      "' write the channel '" + c.name +
-                                      "' (a body and a sensor, say); rename one of them"});
-  if (!clashes.empty()) {
-    model.finalized = false;
-    throw InvalidModel(clashes);
-  }
+    if (++seen[c.name] == 2) twice[c.name.substr(0, c.name.rfind('.'))].push_back(c.name);
+  if (twice.empty()) return;
+  model.finalized = false;
+  throw InvalidModel(name_clashes(model, twice));
 }
 
 }  // namespace lash
