@@ -693,14 +693,16 @@ Plan plan_analysis(const Model& model, const AnalysisOptions& o) {
       if (c.name == name) return true;
     return false;
   };
-  // Spectra: the requested channels, else translational bodies' ax and each clearance Fn.
+  // Spectra: the requested channels, else the translational bodies' ax, then each clearance
+  // joint's Fn (the first one's spectrum gives the verdict its broadband share: a body's motion,
+  // where there is one, rather than a contact force, impulsive whatever the motion).
   p.fft = o.fft_channels;
   if (p.fft.empty()) {
-    for (const auto& j : model.joints) {
+    for (const auto& j : model.joints)
       if (j.type == JointType::translational && j.b.body != kGround)
         p.fft.push_back(model.bodies[j.b.body].name + ".ax");
+    for (const auto& j : model.joints)
       if (j.clearance) p.fft.push_back(j.name + ".Fn");
-    }
   }
   for (const auto& f : p.fft)
     if (!known(f)) throw std::invalid_argument("--fft " + f + ": no such channel");
