@@ -183,3 +183,29 @@ TEST(Failure, ARightHandSideThatKeepsFailingStopsBothIntegratorsInBoundedTime) {
     }
   }
 }
+
+TEST(Dopri5, EventFunctionsAreEvaluatedOncePerCheckedPointNotOncePerFunction) {
+  // 20 event functions that never cross zero, on the oscillator at fixed steps: each accepted
+  // step checks them at its end and three interior points of the dense output, and each
+  // evaluation gives all 20 at once. Evaluating them anew for every function (61 evaluations a
+  // step here) made the cost grow with the square of the number of clearance joints.
+  OdeProblem p = oscillator();
+  p.n_events = 20;
+  long calls = 0;
+  p.events = [&](double, const double* y, double* g) {
+    ++calls;
+    for (int k = 0; k < 20; ++k) g[k] = -1.0 - k - y[0] * y[0];
+  };
+  IntegratorOptions o;
+  o.rtol = o.atol = 1e10;
+  o.max_step = 0.1;
+  auto integ = make_dopri5(p, o);
+  Eigen::VectorXd y(2);
+  y << 1, 0;
+  integ->reset(0, y);
+  ASSERT_EQ(integ->advance(10.0, y).kind, Advance::reached);
+  const long steps = integ->stats().steps;
+  EXPECT_GE(steps, 100);
+  EXPECT_LE(calls, 4 * steps + 1) << calls << " evaluations for " << steps << " steps";
+  EXPECT_NEAR(y[0], std::cos(10.0), 1e-5);
+}

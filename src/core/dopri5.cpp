@@ -38,6 +38,7 @@ class Dopri5 final : public Integrator {
     g_old_.resize(p_.n_events);
     g_new_.resize(p_.n_events);
     g_tmp_.resize(p_.n_events);
+    for (auto& g : g_quarter_) g.resize(p_.n_events);
     ye_.resize(n);
   }
 
@@ -187,17 +188,30 @@ class Dopri5 final : public Integrator {
   }
 
   /// Finds the first event in the accepted step [t_old_, t_]: g_k rising through zero, checked
-  /// at four points of the dense output, then bracketed by the Illinois method.
+  /// at four points of the dense output, then bracketed by the Illinois method. The event
+  /// functions are evaluated once per point for all of them (each evaluation computes every
+  /// g_k: per point and function it made the cost grow with the square of their number).
   void locate_events() {
     if (p_.n_events == 0) return;
     p_.events(t_, y_.data(), g_new_.data());
+    bool have_quarter[3] = {false, false, false};
+    auto quarter = [&](int s) -> const Eigen::VectorXd& {  // g at t_old_ + s·h/4, s = 1, 2, 3
+      Eigen::VectorXd& g = g_quarter_[s - 1];
+      if (!have_quarter[s - 1]) {
+        const double t = t_old_ + 0.25 * s * h_step_;
+        dense(t, ye_);
+        p_.events(t, ye_.data(), g.data());
+        have_quarter[s - 1] = true;
+      }
+      return g;
+    };
     double best = std::numeric_limits<double>::infinity();
     int best_k = -1;
     for (int k = 0; k < p_.n_events; ++k) {
       double ta = t_old_, ga = g_old_[k];
       for (int s = 1; s <= 4; ++s) {
         const double tb = s == 4 ? t_ : t_old_ + 0.25 * s * h_step_;
-        const double gb = s == 4 ? g_new_[k] : g_at(k, tb);
+        const double gb = s == 4 ? g_new_[k] : quarter(s)[k];
         if (ga <= 0.0 && gb > 0.0) {
           const double tk = bracket(k, ta, ga, tb, gb);
           if (tk < best) best = tk, best_k = k;
@@ -310,6 +324,7 @@ class Dopri5 final : public Integrator {
   bool have_step_ = false, need_k1_ = true, pending_event_ = false, end_evaluated_ = false;
   Eigen::VectorXd y_, k1_prev_, k1_, k2_, k3_, k4_, k5_, k6_, k7_, yt_, ynew_, r1_, r2_, r3_, r4_, r5_, ye_;
   Eigen::VectorXd g_old_, g_new_, g_tmp_;
+  Eigen::VectorXd g_quarter_[3];  ///< the event functions at a step's quarter points
 };
 
 }  // namespace
