@@ -347,6 +347,34 @@ TEST(Cli, TuneAbsorberRejectsBadInputWithExitTwo) {
   }
 }
 
+// Every option finite and > 0, but the design overflows or vanishes: exit 2 naming the options a
+// quantity is computed from, never `inf` in the snippet or `null` in the JSON with exit 0.
+TEST(Cli, TuneAbsorberRejectsInputsWhoseDesignOverflows) {
+  struct Case {
+    const char* args;
+    const char* message;
+  };
+  const Case cases[] = {
+      {"--frequency 1e200 --mass-ratio 0.05 --primary-mass 2 --json",
+       "--frequency 1e+200, --mass-ratio 0.05, --primary-mass 2: the design's stiffness k_a = m_a "
+       "ω_a² (N/m) comes out as inf"},
+      {"--frequency 1e200 --mass-ratio 0.05 --primary-mass 2",
+       "--frequency 1e+200, --mass-ratio 0.05, --primary-mass 2: the design's stiffness"},
+      {"--frequency 25 --mass-ratio 1e-320 --absorber-mass 1",
+       "--absorber-mass 1, --mass-ratio 1e-320: the design's primary_mass M = m_a / μ (kg) comes "
+       "out as inf"},
+      {"--frequency 25 --mass-ratio 1e-300 --primary-mass 1e-300",
+       "--mass-ratio 1e-300, --primary-mass 1e-300: the design's absorber_mass m_a = μ M (kg) "
+       "comes out as 0"},
+  };
+  for (const Case& c : cases) {
+    const Result r = run_lash(std::string("tune-absorber ") + c.args);
+    EXPECT_EQ(r.code, 2) << c.args << "\n" << r.out;
+    EXPECT_NE(r.out.find(c.message), std::string::npos) << c.args << "\n" << r.out;
+    EXPECT_EQ(r.out.find("stiffness: ["), std::string::npos) << c.args << "\n" << r.out;
+  }
+}
+
 // The snippet is meant to be pasted: merged into a small model (a link pinned to the ground, the
 // absorber sitting on its marker P or its centre of mass), it must pass `lash check` as printed,
 // apart from the absorber's position, and run with the absorber as a point mass.

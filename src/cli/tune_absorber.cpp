@@ -41,6 +41,45 @@ void require_point(const std::string& point) {
         point));
 }
 
+/// Throws std::invalid_argument unless every number of the design is finite and > 0: inputs that
+/// each pass require_positive can still overflow (k_a = m_a ω_a² at --frequency 1e200) or vanish
+/// (m_a = μ M below the smallest double). `frequency`, `mass_ratio` and `mass` are the options
+/// with their values ("--frequency 1e+200"; `mass`: the mass given, --primary-mass when `has_m`);
+/// the message names those the quantity is computed from, the quantity and its formula.
+void require_finite_design(const AbsorberDesign& d, const std::string& frequency,
+                           const std::string& mass_ratio, const std::string& mass, bool has_m) {
+  // The options each mass is computed from: given, or from the other mass and μ.
+  const std::string m_a = has_m ? mass_ratio + ", " + mass : mass;
+  const std::string m_p = has_m ? mass : mass + ", " + mass_ratio;
+  // k_a and c_a depend on all three: m_a, and ω_a = ω_p / (1 + μ).
+  const std::string f_mu_m_a = frequency + ", " + mass_ratio + ", " + mass;
+  struct Quantity {
+    const char* name;
+    double value;
+    const char* formula;
+    std::string options;
+  };
+  const Quantity quantities[] = {
+      {"absorber_mass", d.absorber_mass, "m_a = μ M (kg)", m_a},
+      {"primary_mass", d.primary_mass, "M = m_a / μ (kg)", m_p},
+      {"stiffness", d.stiffness, "k_a = m_a ω_a² (N/m)", f_mu_m_a},
+      {"damping", d.damping, "c_a = 2 ζ_opt m_a ω_p (N·s/m)", f_mu_m_a},
+      {"tuned_frequency", d.absorber_frequency_hz, "f_a = f_p / (1 + μ) (Hz)",
+       frequency + ", " + mass_ratio},
+      {"primary_stiffness", d.primary_stiffness, "K = M ω_p² (N/m)", frequency + ", " + m_p},
+      {"frequency_ratio", d.frequency_ratio, "f_opt = 1 / (1 + μ)", mass_ratio},
+      {"damping_ratio", d.damping_ratio, "ζ_opt = sqrt(3μ / (8 (1 + μ)³))", mass_ratio},
+      {"absorber_damping_ratio", d.absorber_damping_ratio, "ζ_a = (1 + μ) ζ_opt", mass_ratio},
+      {"peak_amplification", d.peak_amplification, "sqrt(1 + 2/μ)", mass_ratio},
+  };
+  for (const Quantity& q : quantities)
+    if (!(std::isfinite(q.value) && q.value > 0))
+      throw std::invalid_argument(fmt::format(
+          "{}: the design's {} {} comes out as {}; expected inputs for which it is a finite "
+          "number > 0 (these are too large or too small to compute with)",
+          q.options, q.name, q.formula, q.value));
+}
+
 /// One snippet line: `text` padded so that the comments line up, then `# comment`.
 std::string yaml_line(const std::string& text, const std::string& comment) {
   return fmt::format("{:<33} # {}\n", text, comment);
@@ -121,6 +160,11 @@ int TuneAbsorberCommand::run(std::ostream& out, std::ostream& err) const {
     if (has_m) in.primary_mass = primary_mass_;
     if (has_ma) in.absorber_mass = absorber_mass_;
     d = den_hartog_absorber(in);
+    require_finite_design(d, fmt::format("--frequency {}", frequency_hz_),
+                          fmt::format("--mass-ratio {}", mass_ratio_),
+                          has_m ? fmt::format("--primary-mass {}", primary_mass_)
+                                : fmt::format("--absorber-mass {}", absorber_mass_),
+                          has_m);
   } catch (const std::invalid_argument& e) {
     err << "lash tune-absorber: " << e.what() << "\n";
     return 2;
