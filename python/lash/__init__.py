@@ -19,6 +19,8 @@ model is used, so every error reads as the CLI's, `file:line:column: ...`, raise
 from __future__ import annotations
 
 import math
+import numbers
+import operator
 import os
 import re
 from typing import Any, Dict, Iterable, List, Optional, Sequence
@@ -69,6 +71,66 @@ def _override_list(overrides: str | Iterable[str]) -> List[str]:
     return items
 
 
+def _short(value: Any) -> str:
+    """repr(value) cut to a line, for messages (an array or a model text is not repeated whole)."""
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def _real(name: str, value: Any, what: str = "a number") -> float:
+    """`value` as a float: any real number (int, float, NumPy's integers and floats), not a bool;
+    TypeError naming the argument `name` otherwise. A NumPy float narrower than a double
+    (np.float32(0.002)) is the decimal it prints as (0.002), not its binary value widened
+    (0.0020000000949949026)."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+        raise TypeError(f"{name}: expected {what}, got {_short(value)} ({type(value).__name__})")
+    if isinstance(value, np.floating) and value.dtype.itemsize < 8:
+        return float(str(value))
+    return float(value)
+
+
+def _integer(name: str, value: Any, what: str = "a whole number") -> int:
+    """`value` as an int: an int or NumPy integer (operator.index), not a bool or a float;
+    TypeError naming the argument `name` otherwise."""
+    if not isinstance(value, (bool, np.bool_)):
+        try:
+            return operator.index(value)
+        except TypeError:
+            pass
+    raise TypeError(f"{name}: expected {what}, got {_short(value)} ({type(value).__name__})")
+
+
+def _flag(name: str, value: Any) -> bool:
+    """`value` as a bool: True or False (or NumPy's); TypeError naming `name` otherwise."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise TypeError(f"{name}: expected True or False, got {_short(value)} "
+                        f"({type(value).__name__})")
+    return bool(value)
+
+
+def _string(name: str, value: Any, what: str) -> str:
+    """`value`, a str; TypeError naming `name` and `what` was expected otherwise."""
+    if not isinstance(value, str):
+        raise TypeError(f"{name}: expected {what}, got {_short(value)} ({type(value).__name__})")
+    return value
+
+
+def _strings(name: str, value: Any, what: str) -> List[str]:
+    """`value` as a list of str: a single str is one item (not its characters), anything else an
+    iterable of str; TypeError naming `name` and `what` each item is otherwise."""
+    if isinstance(value, str):
+        return [value]
+    try:
+        items = list(value)
+    except TypeError:
+        raise TypeError(f"{name}: expected a list of {what}, got {_short(value)} "
+                        f"({type(value).__name__})") from None
+    for item in items:
+        if not isinstance(item, str):
+            raise TypeError(f"{name}: expected {what}, got {_short(item)} ({type(item).__name__})")
+    return items
+
+
 # Singular of each model section holding named elements, for messages.
 _ELEMENT_KIND = {"bodies": "body", "joints": "joint", "drivers": "driver", "loads": "load",
                  "sensors": "sensor"}
@@ -84,6 +146,9 @@ class Model:
     def __init__(self, text: Optional[str] = None, *, filename: str = "<model>",
                  data: Optional[dict] = None, overrides: str | Sequence[str] = ()) -> None:
         """Use `lash.load(path)`, `lash.loads(text)` or `Model.new(name)` rather than this."""
+        if text is not None:
+            _string("text", text, "the text of a model file (str)")
+        _string("filename", filename, "a file name for messages (str)")
         self._text = text
         self._data = data
         self.filename = filename
@@ -409,15 +474,15 @@ _RUN_KEYWORDS = {"solver.end_time": "t_end", "solver.output_interval": "output_i
 def _run_overrides(t_end: Optional[float], output_interval: Optional[float],
                    integrator: Optional[str], overrides: str | Iterable[str]) -> List[str]:
     extra = _override_list(overrides)
-    if t_end is not None:
-        if not (isinstance(t_end, (int, float)) and math.isfinite(t_end) and t_end > 0):
-            raise ValueError(f"t_end must be a finite time > 0 s, got {t_end!r}")
-        extra.append(f"solver.end_time={_yaml_value(float(t_end))}")
-    if output_interval is not None:
-        if not (isinstance(output_interval, (int, float)) and math.isfinite(output_interval)
-                and output_interval > 0):
-            raise ValueError(f"output_interval must be a finite time > 0 s, got {output_interval!r}")
-        extra.append(f"solver.output_interval={_yaml_value(float(output_interval))}")
+    # Any real number (NumPy's included), checked by value after its type.
+    for name, value, path in (("t_end", t_end, "solver.end_time"),
+                              ("output_interval", output_interval, "solver.output_interval")):
+        if value is None:
+            continue
+        seconds = _real(name, value, "a number (s)")
+        if not (math.isfinite(seconds) and seconds > 0):
+            raise ValueError(f"{name} must be a finite time > 0 s, got {seconds!r}")
+        extra.append(f"{path}={_yaml_value(seconds)}")
     if integrator is not None:
         if not isinstance(integrator, str):
             raise TypeError(f"integrator: expected a name such as \"dopri5\" or \"bdf\", got "

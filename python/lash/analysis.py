@@ -7,11 +7,12 @@ model-free functions of src/analysis one to one: `amplitude_spectrum`, `count_di
 """
 from __future__ import annotations
 
+import re
 from typing import Any, Dict, Optional, Sequence, Tuple
 
 import numpy as np
 
-from . import _lash
+from . import _lash, _flag, _integer, _real, _short, _string, _strings
 
 __all__ = ["analyze", "poincare", "verdict", "spectra", "spectrum", "amplitude_spectrum",
            "count_distinct", "classify_motion", "verdict_rule", "contact_modes",
@@ -19,12 +20,27 @@ __all__ = ["analyze", "poincare", "verdict", "spectra", "spectrum", "amplitude_s
 
 
 def _vector(name: str, x) -> np.ndarray:
-    """`x` as a 1-D float array; ValueError naming the argument when it is not one."""
-    a = np.asarray(x, dtype=float)
+    """`x` as a 1-D float array; TypeError naming the argument when it holds what is not a number
+    (or is a str), ValueError when it has another shape."""
+    try:
+        if isinstance(x, (str, bytes)):
+            raise TypeError
+        a = np.asarray(x, dtype=float)
+    except (TypeError, ValueError):
+        raise TypeError(f"{name}: expected a 1-D sequence of numbers, got {_short(x)} "
+                        f"({type(x).__name__})") from None
     if a.ndim != 1:
         raise ValueError(f"{name}: expected a 1-D sequence of numbers, got an array of shape "
                          f"{a.shape}")
     return a
+
+
+def _c_int(name: str, value: Any) -> int:
+    """`value` as a whole number that fits C's int (what the C++ function takes)."""
+    n = _integer(name, value)
+    if not -2**31 <= n < 2**31:
+        raise ValueError(f"{name}: expected a whole number between -2**31 and 2**31 - 1, got {n}")
+    return n
 
 
 def _model_of(model_or_result):
@@ -36,6 +52,78 @@ def _model_of(model_or_result):
         m.set("solver.output_interval", model_or_result._compiled.output_interval)
         return m
     return _as_model(model_or_result)
+
+
+# The C++ checks name the CLI's options ("--discard 3000000: expected ..."); these are the
+# analyze() arguments they set, which the messages name instead.
+_CLI_OPTIONS = {"--discard": "discard_periods", "--lyapunov-d0": "lyapunov_d0",
+                "--lyapunov-method": "lyapunov_method", "--window": "stats_window",
+                "--poincare": "poincare_driver", "--fft": "fft_channels"}
+
+
+def _run_analysis(model, keywords: Dict[str, str], *, ideal_twin: bool = True,
+                  lyapunov: bool = True, poincare_driver: str = "",
+                  section_planes: Sequence[str] = (), discard_periods: int = 1,
+                  fft_channels: Sequence[str] = (),
+                  stats_window: Optional[Tuple[float, float]] = None, lyapunov_d0: float = 0.0,
+                  continuous_contact_time: float = 0.0,
+                  lyapunov_method: str = "variational") -> Dict[str, Any]:
+    """analyze() with each option checked by type (TypeError) and named in messages as the
+    caller's argument: `keywords` maps analyze()'s names to the caller's ("section_planes" to
+    poincare()'s "planes"); the others keep theirs."""
+    def name(option: str) -> str:
+        return keywords.get(option, option)
+
+    given = {"discard_periods": discard_periods, "lyapunov_d0": lyapunov_d0,
+             "lyapunov_method": lyapunov_method, "stats_window": stats_window,
+             "poincare_driver": poincare_driver}
+    discard = _integer(name("discard_periods"), discard_periods, "a whole number of periods")
+    opts: Dict[str, Any] = {
+        "ideal_twin": _flag(name("ideal_twin"), ideal_twin),
+        "lyapunov": _flag(name("lyapunov"), lyapunov),
+        "poincare_driver": _string(name("poincare_driver"), poincare_driver,
+                                   "a driver name (str; \"\": the first rotary driver)"),
+        "section_planes": _strings(name("section_planes"), section_planes,
+                                   "section planes \"<body>.<x|y|phi|vx|vy|omega>=VALUE[,down]\""),
+        # A count beyond C's int is out of the C++ check's range as well: clamped, it is
+        # reported there, with the value given.
+        "discard_periods": max(min(discard, 2**31 - 1), -2**31),
+        "fft_channels": _strings(name("fft_channels"), fft_channels,
+                                 "channel names such as \"slider.ax\""),
+        "lyapunov_d0": _real(name("lyapunov_d0"), lyapunov_d0, "a separation (m)"),
+        "lyapunov_method": _string(name("lyapunov_method"), lyapunov_method,
+                                   "\"variational\" or \"two-trajectory\""),
+        "continuous_contact_time": _real(name("continuous_contact_time"),
+                                         continuous_contact_time, "a time (s)")}
+    if stats_window is not None:
+        try:
+            window = None if isinstance(stats_window, (str, bytes)) else list(stats_window)
+        except TypeError:
+            window = None
+        if window is None or len(window) != 2:
+            raise TypeError(f"{name('stats_window')}: expected a pair of times (t0, t1) in s, "
+                            f"got {_short(stats_window)} ({type(stats_window).__name__})")
+        opts["stats_window"] = (_real(f"{name('stats_window')}[0]", window[0], "a time (s)"),
+                                _real(f"{name('stats_window')}[1]", window[1], "a time (s)"))
+    compiled = _model_of(model).compiled()
+    try:
+        return _lash.analyze(compiled, opts)
+    except ValueError as e:
+        if isinstance(e, _lash.ModelError):
+            raise
+        message = str(e)
+    # "--fft slider.axx: no such channel" -> "fft_channels: 'slider.axx': no such channel",
+    # "--discard 3000000: expected ..." -> "discard_periods=3000000: expected ...".
+    m = re.fullmatch(r"(--[a-z0-9-]+) (.*?): (.*)", message, re.S)
+    if m and m.group(1) in _CLI_OPTIONS:
+        option = _CLI_OPTIONS[m.group(1)]
+        if option == "fft_channels":
+            message = f"{name(option)}: '{m.group(2)}': {m.group(3)}"
+        else:
+            message = f"{name(option)}={given[option]!r}: {m.group(3)}"
+    elif message.startswith("section plane "):
+        message = f"{name('section_planes')}: {message}"
+    raise ValueError(message) from None
 
 
 def analyze(model, *, ideal_twin: bool = True, lyapunov: bool = True,
@@ -61,16 +149,15 @@ def analyze(model, *, ideal_twin: bool = True, lyapunov: bool = True,
     {frequency Hz, amplitude}}, statistics {channel: {min, max, peak, rms, crest, ...}},
     clearance_joints {joint: contact modes}, lyapunov (None when not estimated), ideal_twin
     {channel: comparison} (None without). Releases the GIL; Ctrl-C raises KeyboardInterrupt.
-    Raises ValueError for an option naming what does not exist."""
-    opts: Dict[str, Any] = {"ideal_twin": ideal_twin, "lyapunov": lyapunov,
-                            "poincare_driver": poincare_driver,
-                            "section_planes": list(section_planes),
-                            "discard_periods": discard_periods, "fft_channels": list(fft_channels),
-                            "lyapunov_d0": lyapunov_d0, "lyapunov_method": lyapunov_method,
-                            "continuous_contact_time": continuous_contact_time}
-    if stats_window is not None:
-        opts["stats_window"] = tuple(stats_window)
-    return _lash.analyze(_model_of(model).compiled(), opts)
+    `section_planes` and `fft_channels` are lists of strings (a single string is one plane or
+    channel). Raises TypeError for an option of the wrong type, ValueError for one out of range
+    or naming what does not exist, each naming the argument."""
+    return _run_analysis(model, {}, ideal_twin=ideal_twin, lyapunov=lyapunov,
+                         poincare_driver=poincare_driver, section_planes=section_planes,
+                         discard_periods=discard_periods, fft_channels=fft_channels,
+                         stats_window=stats_window, lyapunov_d0=lyapunov_d0,
+                         continuous_contact_time=continuous_contact_time,
+                         lyapunov_method=lyapunov_method)
 
 
 def poincare(model, *, driver: str = "", planes: Sequence[str] = (),
@@ -80,8 +167,9 @@ def poincare(model, *, driver: str = "", planes: Sequence[str] = (),
     ("<body>.<x|y|phi|vx|vy|omega>=VALUE[,down]"). Returns analyze()'s "poincare" dict (points
     (n, 2k) array of each clearance joint's eccentricity (ex, ey) in m, times, distinct, ...),
     or None when there is neither a period nor a plane. Runs without ideal twin and Lyapunov."""
-    return analyze(model, ideal_twin=False, lyapunov=False, poincare_driver=driver,
-                   section_planes=planes, discard_periods=discard_periods)["poincare"]
+    return _run_analysis(model, {"poincare_driver": "driver", "section_planes": "planes"},
+                         ideal_twin=False, lyapunov=False, poincare_driver=driver,
+                         section_planes=planes, discard_periods=discard_periods)["poincare"]
 
 
 def verdict(model, **options: Any) -> Dict[str, Any]:
@@ -93,13 +181,14 @@ def verdict(model, **options: Any) -> Dict[str, Any]:
 def spectra(model, channels: Sequence[str] = (), discard_periods: int = 1) -> Dict[str, Any]:
     """Amplitude spectra (Hann window, after `discard_periods` periods) of `channels` of
     `model`, as analyze() computes them: {channel: {frequency (Hz), amplitude, ...}}."""
-    return analyze(model, ideal_twin=False, lyapunov=False, fft_channels=channels,
-                   discard_periods=discard_periods)["spectra"]
+    return _run_analysis(model, {"fft_channels": "channels"}, ideal_twin=False, lyapunov=False,
+                         fft_channels=channels, discard_periods=discard_periods)["spectra"]
 
 
 def spectrum(result, channel: str, *, t0: float = 0.0, window: str = "hann") -> Dict[str, Any]:
     """Amplitude spectrum of one channel of a Result from time `t0` (s) on, from its uniformly
     spaced outputs (no new run): amplitude_spectrum(result[channel][time >= t0], dt)."""
+    t0 = _real("t0", t0, "a time (s)")
     keep = result.time >= t0
     t = result.time[keep]
     if len(t) < 4:
@@ -112,22 +201,30 @@ def amplitude_spectrum(x, dt: float, window: str = "hann") -> Dict[str, Any]:
     "hann" or "rectangular" (C++ lash::amplitude_spectrum, FFTW): a sinusoid of amplitude A on a
     bin reads A. Returns {frequency (Hz), amplitude, psd (units^2/Hz), window}. Raises ValueError
     for fewer than 4 samples or dt <= 0."""
-    return _lash.amplitude_spectrum(_vector("x", x), float(dt), window)
+    return _lash.amplitude_spectrum(_vector("x", x), _real("dt", dt, "a time step (s)"),
+                                    _string("window", window, "\"hann\" or \"rectangular\""))
 
 
 def count_distinct(points, tol: float) -> int:
     """Number of distinct points (greedy clustering within Euclidean distance `tol`): a period-k
     orbit sampled stroboscopically gives k (C++ lash::count_distinct). Raises ValueError for
     points of different dimensions or tol < 0."""
-    return _lash.count_distinct([list(map(float, p)) for p in points], float(tol))
+    if isinstance(points, (str, bytes)) or not hasattr(points, "__iter__"):
+        raise TypeError(f"points: expected a sequence of points (each a sequence of numbers), "
+                        f"got {_short(points)} ({type(points).__name__})")
+    rows = [_vector(f"points[{i}]", p).tolist() for i, p in enumerate(points)]
+    return _lash.count_distinct(rows, _real("tol", tol, "a distance"))
 
 
 def classify_motion(lyapunov: float, period: float, distinct: int, sections: int,
                     non_harmonic_peaks: int = -1, min_end_time: float = 0.0) -> Tuple[str, list]:
     """The verdict rule (verdict_rule()) on its inputs: largest Lyapunov exponent (1/s, NaN if not
     computed), period (s), distinct Poincare points, sections taken. Returns (kind, evidence)."""
-    return _lash.classify_motion(lyapunov, period, distinct, sections, non_harmonic_peaks,
-                                 min_end_time)
+    return _lash.classify_motion(_real("lyapunov", lyapunov, "an exponent (1/s)"),
+                                 _real("period", period, "a period (s)"),
+                                 _c_int("distinct", distinct), _c_int("sections", sections),
+                                 _c_int("non_harmonic_peaks", non_harmonic_peaks),
+                                 _real("min_end_time", min_end_time, "a time (s)"))
 
 
 def verdict_rule() -> str:
@@ -147,12 +244,17 @@ def contact_modes(times, onset, velocities, in_contact_at_t0: bool, t0: float, t
         raise ValueError(f"onset: expected a 1-D sequence of booleans, got an array of shape "
                          f"{onset.shape}")
     return _lash.contact_modes(_vector("times", times).tolist(), [bool(o) for o in onset],
-                               _vector("velocities", velocities).tolist(), in_contact_at_t0,
-                               t0, t1, continuous_time)
+                               _vector("velocities", velocities).tolist(),
+                               _flag("in_contact_at_t0", in_contact_at_t0),
+                               _real("t0", t0, "a time (s)"), _real("t1", t1, "a time (s)"),
+                               _real("continuous_time", continuous_time, "a time (s)"))
 
 
 def decimate_min_max(t, v, buckets: int) -> Tuple[np.ndarray, np.ndarray]:
     """Reduces (t, v) to about 2*buckets points keeping each bucket's min and max in time order,
     so impact spikes survive plotting. Raises ValueError unless t and v have the same length and
     buckets >= 0 (0 keeps every point)."""
-    return _lash.decimate_min_max(_vector("t", t), _vector("v", v), int(buckets))
+    buckets = _integer("buckets", buckets, "a number of buckets")
+    if not 0 <= buckets < 2**63:
+        raise ValueError(f"decimate_min_max: buckets must be >= 0 (and below 2**63), got {buckets}")
+    return _lash.decimate_min_max(_vector("t", t), _vector("v", v), buckets)

@@ -358,3 +358,74 @@ def test_sweep_from_python_equals_the_cli(tmp_path):
     bad.write_text(f"study: bad\nmodel: {FLORES}\nparameters: {{drivers.crank.speed_rpm: {{vals: [1]}}}}\n")
     with pytest.raises(lash.ModelError, match="bad.yaml:3"):
         lash.sweep(bad, tmp_path / "bad")
+
+
+def test_simulate_takes_numpy_numbers_for_times():
+    """t_end and output_interval: any real number, NumPy's included; a float32 is the decimal it
+    prints as. A bool, a str or a list is a TypeError naming the argument."""
+    for t_end in (np.float32(0.002), np.float64(0.002), np.arange(1, 3)[0] * 0.002):
+        result = lash.simulate(FLORES, t_end=t_end, output_interval=np.float32(5e-4))
+        assert result.ok and result.time[-1] == 0.002 and len(result) == 5, (t_end, result.time)
+    assert lash.simulate(FLORES, t_end=np.arange(1, 3)[0] * 5e-4).time[-1] == 5e-4  # np.int64
+    for bad, kind in (("abc", "str"), ([1], "list"), (True, "bool")):
+        with pytest.raises(TypeError, match=rf"^t_end: expected a number \(s\), got .* \({kind}\)$"):
+            lash.simulate(FLORES, t_end=bad)
+        with pytest.raises(TypeError, match=rf"^output_interval: expected a number \(s\), got .*{kind}"):
+            lash.simulate(FLORES, t_end=0.001, output_interval=bad)
+    with pytest.raises(ValueError, match=r"^t_end must be a finite time > 0 s, got -1.0$"):
+        lash.simulate(FLORES, t_end=np.int64(-1))
+
+
+def test_analysis_options_are_checked_and_named_as_python_arguments():
+    """Wrong types: TypeError naming the keyword, before anything runs; values out of range or
+    naming what does not exist: ValueError naming the keyword (not the CLI's --option); a single
+    string is one channel or plane, not its characters."""
+    A = lash.analysis
+    model = lash.load(FLORES).set("solver.end_time", 0.012)
+    type_errors = [
+        (lambda: A.analyze(model, discard_periods=2.5), r"^discard_periods: expected a whole number of periods, got 2.5 \(float\)$"),
+        (lambda: A.analyze(model, discard_periods="3"), r"^discard_periods: .* got '3' \(str\)$"),
+        (lambda: A.analyze(model, lyapunov_d0="1e-7"), r"^lyapunov_d0: expected a separation \(m\), got '1e-7' \(str\)$"),
+        (lambda: A.analyze(model, ideal_twin=1), r"^ideal_twin: expected True or False, got 1 \(int\)$"),
+        (lambda: A.analyze(model, fft_channels=[1]), r"^fft_channels: expected channel names"),
+        (lambda: A.analyze(model, stats_window=3), r"^stats_window: expected a pair of times"),
+        (lambda: A.poincare(model, driver=3), r"^driver: expected a driver name"),
+        (lambda: A.poincare(model, planes=None), r"^planes: expected a list of section planes"),
+        (lambda: A.spectra(model, channels=5), r"^channels: expected a list of channel names"),
+        (lambda: A.amplitude_spectrum(np.ones(8), 0.1, window=None), r"^window: expected \"hann\" or \"rectangular\", got None \(NoneType\)$"),
+        (lambda: A.amplitude_spectrum("abc", 0.1), r"^x: expected a 1-D sequence of numbers, got 'abc' \(str\)$"),
+        (lambda: A.amplitude_spectrum(np.ones(8), "0.1"), r"^dt: expected a time step \(s\)"),
+        (lambda: A.count_distinct(5, 0.1), r"^points: expected a sequence of points"),
+        (lambda: A.count_distinct([[1, 2]], None), r"^tol: expected a distance, got None"),
+        (lambda: A.decimate_min_max([0, 1], [0, 1], 2.5), r"^buckets: expected a number of buckets"),
+        (lambda: A.classify_motion(0.0, 0.01, "1", 4), r"^distinct: expected a whole number"),
+        (lambda: A.contact_modes([], [], [], "no", 0, 1, 0), r"^in_contact_at_t0: expected True or False"),
+        (lambda: lash.loads(5), r"^text: expected the text of a model file \(str\), got 5 \(int\)$"),
+        (lambda: lash.loads("x: 1", filename=3), r"^filename: expected a file name"),
+    ]
+    for call, message in type_errors:
+        with pytest.raises(TypeError, match=message) as err:
+            call()
+        assert len(str(err.value)) < 200, str(err.value)
+    value_errors = [
+        (lambda: A.poincare(model, discard_periods=10**12), r"^discard_periods=1000000000000: expected a whole number of periods in \[0, 1e6\]$"),
+        (lambda: A.analyze(model, discard_periods=-1), r"^discard_periods=-1: expected"),
+        (lambda: A.analyze(model, fft_channels=["slider.axx"]), r"^fft_channels: 'slider.axx': no such channel$"),
+        (lambda: A.spectra(model, channels="slider.axx"), r"^channels: 'slider.axx': no such channel$"),
+        (lambda: A.analyze(model, lyapunov_d0=1.0), r"^lyapunov_d0=1.0: expected a separation"),
+        (lambda: A.analyze(model, lyapunov_method="qr"), r"^lyapunov_method='qr': expected variational"),
+        (lambda: A.analyze(model, stats_window=(0.5, 0.1)), r"^stats_window=\(0.5, 0.1\): T0 must be less than T1$"),
+        (lambda: A.poincare(model, driver="crankk"), r"^driver='crankk': no revolute driver"),
+        (lambda: A.poincare(model, planes="slider.vq=0"), r"^planes: section plane 'slider.vq=0'"),
+        (lambda: A.count_distinct([1, 2, 3], 0.1), r"^points\[0\]: expected a 1-D sequence"),
+        (lambda: A.count_distinct(np.zeros((2, 2, 2)), 0.1), r"^points\[0\]: expected a 1-D sequence of numbers, got an array of shape \(2, 2\)$"),
+        (lambda: A.classify_motion(0.0, 0.01, 2**40, 4), r"^distinct: expected a whole number between"),
+    ]
+    for call, message in value_errors:
+        with pytest.raises(ValueError, match=message):
+            call()
+    # One string: one channel, one plane.
+    assert list(A.spectra(model, channels="slider.ax", discard_periods=0)) == ["slider.ax"]
+    assert list(A.spectra(model, ["slider.ax"], np.int64(0))) == ["slider.ax"]
+    assert A.poincare(model, planes="slider.vx=0")["planes"] == ["slider.vx=0"]
+    assert A.classify_motion(np.float64("nan"), np.float32(0.012), np.int64(1), np.int32(4))[0]
