@@ -531,6 +531,28 @@ PYBIND11_MODULE(_lash, m) {
         },
         py::arg("text"), py::arg("filename"), py::arg("overrides") = std::vector<std::string>{},
         "lash::load_model_text: parse, apply overrides, validate; raises ModelError.");
+  m.def("read_model_file",
+        [](const py::bytes& path, const std::string& name) {
+          // The checks of load_model_file (io/files.hpp: a regular file, at most
+          // kMaxModelFileBytes) before anything is read, with its messages; they name the file as
+          // `name` (the path as UTF-8 text), `path` being the file system's bytes.
+          const std::string raw = path;
+          auto reason = [&](const std::exception& e) {
+            std::string what = e.what();
+            if (what.rfind(raw + ": ", 0) == 0) what.erase(0, raw.size() + 2);
+            return what;
+          };
+          try {
+            return py::bytes(lash::read_input_file(raw, lash::kMaxModelFileBytes));
+          } catch (const std::invalid_argument& e) {
+            throw lash::ModelError({{name, 0, 0, "", "cannot read the model file: " + reason(e)}});
+          } catch (const lash::IoError& e) {
+            throw lash::IoError(name, reason(e));
+          }
+        },
+        py::arg("path"), py::arg("name"),
+        "lash::read_input_file with the model file's limits; raises ModelError for what is not a "
+        "regular file or is too large (as `lash check`), IoError when it cannot be read.");
   m.def("sweep",
         [](const std::string& study, const std::string& output, int jobs, bool resume) {
           const lash::StudySpec spec = lash::load_study_file(study);

@@ -131,6 +131,15 @@ def _strings(name: str, value: Any, what: str) -> List[str]:
     return items
 
 
+def _message_name(filename: str) -> str:
+    """`filename` as UTF-8 text for messages: a name that is not UTF-8 (bytes that os.fsdecode
+    kept as surrogate escapes) shows those bytes as \\xNN, as `lash check` prints them raw."""
+    try:
+        return os.fsencode(filename).decode("utf-8", "backslashreplace")
+    except UnicodeEncodeError:  # a lone surrogate that no file name's bytes make
+        return filename.encode("utf-8", "backslashreplace").decode("utf-8")
+
+
 # Singular of each model section holding named elements, for messages.
 _ELEMENT_KIND = {"bodies": "body", "joints": "joint", "drivers": "driver", "loads": "load",
                  "sensors": "sensor"}
@@ -260,11 +269,12 @@ class Model:
 
     def compiled(self, extra_overrides: str | Sequence[str] = ()):
         """The model loaded and validated by the C++ loader (cached); raises ModelError."""
+        name = _message_name(self.filename)
         if extra_overrides:
-            return _lash.load_text(self.text(), self.filename,
+            return _lash.load_text(self.text(), name,
                                    self.overrides + _override_list(extra_overrides))
         if self._compiled is None:
-            self._compiled = _lash.load_text(self.text(), self.filename, self.overrides)
+            self._compiled = _lash.load_text(self.text(), name, self.overrides)
         return self._compiled
 
     def check(self) -> "Model":
@@ -297,17 +307,36 @@ class Model:
         return f"<lash.Model {self.filename!r}, {len(self.overrides)} overrides>"
 
 
-def load(path: str | os.PathLike, overrides: str | Iterable[str] = ()) -> Model:
+def load(path: str | bytes | os.PathLike, overrides: str | Iterable[str] = ()) -> Model:
     """Reads a model file (YAML, docs/model-format.md) and validates it.
 
     `overrides` are "KEY.PATH=VALUE" strings as for `lash run --set` (a single string is one
-    override). Raises ModelError with
-    every problem as `file:line:column: element: message` (also as `.diagnostics`, a list of
-    (file, line, column, element, message)), OSError when the file cannot be read."""
-    path = os.fspath(path)
-    with open(path, encoding="utf-8") as f:
-        text = f.read()
-    model = Model(text, filename=path, overrides=overrides)
+    override). As `lash check`, the file must be a regular file of at most 16 MiB (not a folder,
+    a FIFO or a device such as /dev/zero) and UTF-8 text, checked before it is read; its name may
+    be any file name (bytes that are not UTF-8 included: `Model.filename` is then os.fsdecode's
+    str, and messages show those bytes as \\xNN). Raises ModelError with every problem as
+    `file:line:column: element: message` (also as `.diagnostics`, a list of (file, line, column,
+    element, message)), FileNotFoundError (an OSError) when there is no such file, IoError (an
+    OSError) when it cannot be read."""
+    if not isinstance(path, (str, bytes, os.PathLike)):
+        raise TypeError(f"path: expected a model file path (str, bytes or os.PathLike), got "
+                        f"{_short(path)} ({type(path).__name__})")
+    raw = os.fsencode(path)
+    filename = os.fsdecode(raw)
+    name = _message_name(filename)
+    os.stat(filename)  # FileNotFoundError, PermissionError, ... with the path as given
+    data = _lash.read_model_file(raw, name)  # a regular file, not too large: as `lash check`
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError:
+        text = None
+    if text is None:
+        # The loader's ModelError, with line and column: "not UTF-8 text (byte 0xE9)".
+        _lash.load_text(data, name, _override_list(overrides))
+        error = ModelError(f"{name}: not UTF-8 text")  # the loader found nothing wrong
+        error.diagnostics = [(name, 0, 0, "", "not UTF-8 text")]
+        raise error
+    model = Model(text, filename=filename, overrides=overrides)
     model.check()
     return model
 
@@ -458,10 +487,10 @@ class Result:
                 f"{len(self.events['time'])} events>")
 
 
-def _as_model(model: Model | str | os.PathLike) -> Model:
+def _as_model(model: Model | str | bytes | os.PathLike) -> Model:
     if isinstance(model, Model):
         return model
-    if isinstance(model, (str, os.PathLike)):
+    if isinstance(model, (str, bytes, os.PathLike)):
         return load(model)
     raise TypeError(f"expected a lash.Model or a model file path, got {type(model).__name__}")
 

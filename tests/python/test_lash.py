@@ -360,6 +360,82 @@ def test_sweep_from_python_equals_the_cli(tmp_path):
         lash.sweep(bad, tmp_path / "bad")
 
 
+def python_in_child(code, timeout=60):
+    """Runs `code` in a child interpreter with lash importable, its address space limited to 2 GB
+    (so that reading /dev/zero whole ends in MemoryError, not in the OOM killer); returns the
+    CompletedProcess, or None when it did not end within `timeout` s."""
+    import resource
+
+    def limit():
+        resource.setrlimit(resource.RLIMIT_AS, (2 << 30, 2 << 30))
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in sys.path if p))
+    try:
+        return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                              timeout=timeout, preexec_fn=limit, env=env)
+    except subprocess.TimeoutExpired:
+        return None
+
+
+def test_load_refuses_what_lash_check_refuses_before_reading(tmp_path):
+    """A device, a FIFO, a folder and a file over 16 MiB: ModelError with `lash check`'s words,
+    before anything is read (no hang on the FIFO, no memory exhausted on /dev/zero)."""
+    fifo = tmp_path / "fifo.yaml"
+    os.mkfifo(fifo)
+    big = tmp_path / "big.yaml"
+    with open(big, "wb") as f:  # sparse: 17 MiB by its size, nothing written
+        f.truncate(17 << 20)
+    for path in ["/dev/zero", str(fifo), str(big)]:
+        cli = subprocess.run([LASH, "check", path], capture_output=True, text=True)
+        assert cli.returncode == 2, cli.stderr
+        for call in ("lash.load(p)", "lash.simulate(p)", "lash.analysis.spectra(p)"):
+            code = (f"import lash\np = {path!r}\ntry:\n    {call}\n"
+                    "except lash.ModelError as e:\n    print(e, end='')\n"
+                    "    print(repr(e.diagnostics))\n")
+            child = python_in_child(code)
+            assert child is not None, f"{call} on {path}: no answer within 60 s"
+            assert child.returncode == 0, f"{call} on {path}: {child.stderr[-2000:]}"
+            message, diagnostics = child.stdout.splitlines()
+            assert message in cli.stderr.splitlines(), (message, cli.stderr)
+            assert "cannot read the model file: " in message
+            assert eval(diagnostics)[0][:4] == (path, 0, 0, "")
+    assert "not a regular file (expected a text file)" in str(
+        pytest.raises(lash.ModelError, lash.load, "/dev/zero").value)
+    # A folder (which the CLI's argument parser refuses before the loader sees it).
+    assert str(pytest.raises(lash.ModelError, lash.load, tmp_path).value) == (
+        f"{tmp_path}: cannot read the model file: not a regular file (expected a text file)\n")
+    assert f"{17 << 20} bytes, more than the {16 << 20} bytes" in str(
+        pytest.raises(lash.ModelError, lash.load, big).value)
+    with pytest.raises(FileNotFoundError, match="missing.yaml"):
+        lash.load(tmp_path / "missing.yaml")
+    # Not UTF-8 inside: the loader's message with line and column, as `lash check`.
+    latin = tmp_path / "latin.yaml"
+    latin.write_bytes(b"name: mod\xe9le\n")
+    with pytest.raises(lash.ModelError, match=r"latin.yaml:1:10: not UTF-8 text \(byte 0xE9\)"):
+        lash.load(latin)
+
+
+def test_a_file_name_that_is_not_utf8_loads_as_with_the_cli(tmp_path):
+    """A name with a Latin-1 byte is a valid file name: it loads from str (os.fsdecode's surrogate
+    escapes), bytes and pathlib, and messages name the file with the byte as \\xe9."""
+    raw = os.fsencode(tmp_path) + b"/mod\xe9le.yaml"
+    name = os.fsdecode(raw)
+    with open(FLORES, "rb") as f, open(raw, "wb") as g:
+        g.write(f.read())
+    assert subprocess.run([LASH, "check", raw], capture_output=True).returncode == 0
+    for path in (name, raw, tmp_path / os.fsdecode(b"mod\xe9le.yaml")):
+        model = lash.load(path)
+        assert model.name == "flores_slider_crank" and model.filename == name
+    assert lash.simulate(name, t_end=0.0005).ok
+    shown = f"{tmp_path}/mod\\xe9le.yaml"
+    with pytest.raises(lash.ModelError) as err:
+        lash.load(name, overrides="joints.rod_slider.clearance=-1")
+    assert str(err.value).startswith(f"{shown}:"), str(err.value)
+    assert len(str(err.value)) < 500 and "Flores slider-crank" not in str(err.value)
+    assert err.value.diagnostics[0][0] == shown
+    with pytest.raises(lash.ModelError, match=r"^<mod\\xe9le>:1:1: solver: missing"):
+        lash.loads("name: x\nbodies: {b: {mass: 1}}\n", filename=os.fsdecode(b"<mod\xe9le>"))
+
+
 def test_simulate_takes_numpy_numbers_for_times():
     """t_end and output_interval: any real number, NumPy's included; a float32 is the decimal it
     prints as. A bool, a str or a list is a TypeError naming the argument."""
