@@ -166,10 +166,14 @@ class Model:
 
     # --- construction --------------------------------------------------------------------
     @classmethod
-    def new(cls, name: str, *, gravity: Sequence[float] = (0.0, -9.81)) -> "Model":
-        """An empty model named `name`, to be built with add_body, add_joint, ..."""
-        return cls(data={"name": name, "gravity": list(gravity), "bodies": {}, "joints": {}},
-                   filename=f"<{name}>")
+    def new(cls, name: str, *, gravity: Optional[Sequence[float]] = None) -> "Model":
+        """An empty model named `name`, to be built with add_body, add_joint, ... Gravity is off
+        unless given, as in a model file (docs/model-format.md §2): gravity=[0, -9.81] (m/s^2)."""
+        data: Dict[str, Any] = {"name": name}
+        if gravity is not None:
+            data["gravity"] = list(gravity)
+        data.update({"bodies": {}, "joints": {}})
+        return cls(data=data, filename=f"<{name}>")
 
     @property
     def data(self) -> dict:
