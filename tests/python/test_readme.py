@@ -1,6 +1,8 @@
-"""The README's examples run as written: its Python example that builds a model in code. Run by
+"""The README's examples run as written: its command sequence under "Using it", each line after
+the ones above it in a fresh folder, and its Python example that builds a model in code. Run by
 ctest with the other Python tests (LASH_BINARY and LASH_SOURCE_DIR set)."""
 import os
+import re
 import subprocess
 
 import lash
@@ -12,6 +14,22 @@ LASH = os.environ.get("LASH_BINARY", os.path.join(SOURCE, "build", "lash"))
 def readme() -> str:
     with open(os.path.join(SOURCE, "README.md"), encoding="utf-8") as f:
         return f.read()
+
+
+def test_the_using_it_commands_run_in_order_in_a_fresh_folder(tmp_path):
+    """Every command of the first block under "## Using it" exits 0, run in order in a folder
+    holding only examples/ and build/lash, as a fresh clone after `make`."""
+    section = readme().split("\n## Using it\n", 1)[1]
+    block = re.match(r"\n*((?:    .*\n)+)", section).group(1)
+    commands = [c.strip() for c in block.replace("\\\n", " ").splitlines()]
+    assert len(commands) >= 5 and any("--from" in c for c in commands)
+    (tmp_path / "build").mkdir()
+    os.symlink(os.path.abspath(LASH), tmp_path / "build" / "lash")
+    os.symlink(os.path.abspath(os.path.join(SOURCE, "examples")), tmp_path / "examples")
+    for command in commands:
+        run = subprocess.run(["bash", "-c", command], cwd=tmp_path, capture_output=True,
+                             text=True, timeout=300)
+        assert run.returncode == 0, f"{command}\n{run.stdout[-1000:]}\n{run.stderr[-2000:]}"
 
 
 def test_the_python_example_builds_a_model_and_saves_it(tmp_path, monkeypatch):
