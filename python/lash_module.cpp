@@ -526,7 +526,7 @@ PYBIND11_MODULE(_lash, m) {
            const std::vector<std::string>& overrides) {
           auto c = std::make_shared<CompiledModel>(
               CompiledModel{lash::load_model_text(text, filename, overrides), {}});
-          c->channels = lash::channel_info(c->loaded.model, lash::Workspace(c->loaded.model));
+          c->channels = lash::channel_info(c->loaded.model);
           return c;
         },
         py::arg("text"), py::arg("filename"), py::arg("overrides") = std::vector<std::string>{},

@@ -232,8 +232,18 @@ TEST(ModelLoader, ExamplesLoad) {
       "erkaya_compliant_beam.yaml", "breaker_linkage_flexible.yaml",
       "press_slider_crank_flexible_rod.yaml",
       "breaker_linkage.yaml"};
-  for (const auto& name : names)
+  for (const auto& name : names) {
     EXPECT_NO_THROW(load_model_file(lash::test::example_path(name))) << name;
+    // The channels finalize() listed are those a workspace of the model lists.
+    const Model m = load_model_file(lash::test::example_path(name)).model;
+    const auto listed = channel_info(m), again = channel_info(m, Workspace(m));
+    ASSERT_EQ(listed.size(), again.size()) << name;
+    EXPECT_GT(listed.size(), 10u) << name;
+    for (size_t i = 0; i < listed.size(); ++i)
+      EXPECT_TRUE(listed[i].name == again[i].name && listed[i].unit == again[i].unit &&
+                  listed[i].description == again[i].description)
+          << name << ": " << listed[i].name;
+  }
   // The list is every example: a new file in examples/ must be added here (and to the README).
   for (const auto& entry : std::filesystem::directory_iterator(lash::test::example_path(""))) {
     if (entry.path().extension() != ".yaml") continue;

@@ -510,7 +510,7 @@ int main(int argc, char** argv) {
   if (!format_opt.empty())
     output.format = format_opt == "hdf5" ? lash::OutputFormat::hdf5 : lash::OutputFormat::csv;
   try {
-    lash::select_channels(lash::channel_info(model, lash::Workspace(model)), output.channels);
+    lash::select_channels(lash::channel_info(model), output.channels);
   } catch (const std::invalid_argument& e) {
     std::cerr << "error: " << (channels_opt.empty() ? "solver.output_channels" : "--channels")
               << ": " << e.what() << "\nnothing was run; " << out_dir << "/ is unchanged\n";

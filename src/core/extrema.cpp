@@ -36,7 +36,7 @@ double hermite_max(double v0, double d0, double v1, double d1, double h) {
 
 ChannelExtrema::ChannelExtrema(const Model& model)
     : model_(model), resolution_(model.solver.rtol), end_(model.solver.end_time), to_(end_) {
-  const std::vector<ChannelInfo> info = channel_info(model, Workspace(model));
+  const std::vector<ChannelInfo> info = channel_info(model);
   const size_t n = info.size();
   ext_.assign(n, ChannelExtremum{});
   std::vector<std::string> units;

@@ -400,9 +400,13 @@ void finalize(Model& model) {
   // Two elements of different kinds may share a name, but not a channel.
   std::map<std::string, int> seen;
   std::map<std::string, std::vector<std::string>> twice;  // element name -> channels written twice
-  for (const auto& c : channel_info(model, Workspace(model)))
+  std::vector<ChannelInfo> channels = channel_info(model, Workspace(model));
+  for (const auto& c : channels)
     if (++seen[c.name] == 2) twice[c.name.substr(0, c.name.rfind('.'))].push_back(c.name);
-  if (twice.empty()) return;
+  if (twice.empty()) {
+    model.channels = std::move(channels);
+    return;
+  }
   model.finalized = false;
   throw InvalidModel(name_clashes(model, twice));
 }

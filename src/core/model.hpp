@@ -178,6 +178,11 @@ struct SolverSettings {
   double baumgarte_beta = 100.0;
 };
 
+/// One output channel: `<element>.<quantity>`, its SI unit ("" dimensionless) and meaning.
+struct ChannelInfo {
+  std::string name, unit, description;
+};
+
 struct Model;
 /// Whether driver d drives an angle (rad, its multiplier a torque) rather than a length (m).
 bool driver_is_rotary(const Model& model, const Driver& d);
@@ -193,6 +198,10 @@ struct Model {
   Vec2 gravity = Vec2::Zero();
   SolverSettings solver;
   bool finalized = false;      ///< set by finalize()
+  /// Every channel in column order, set by finalize() (channel_info(model) reads it; building a
+  /// Workspace to list them compiles every expression of the model). Code that changes the
+  /// elements of a finalized model (the ideal twin drops its clearances) lists them again.
+  std::vector<ChannelInfo> channels;
 
   /// Number of clearance joints.
   int clearance_joint_count() const;

@@ -29,7 +29,7 @@ ResultsWriter::ResultsWriter(const Model& model, const std::string& folder,
       extrema_(model) {
   // A selection that matches nothing, or a format this build lacks, is refused before the
   // folder is touched.
-  channels_ = channel_info(model, Workspace(model));
+  channels_ = channel_info(model);
   selected_ = select_channels(channels_, output_.channels);
   if (output_.format == OutputFormat::hdf5 && !hdf5_available())
     throw std::invalid_argument("--format hdf5: this lash was built without HDF5 (libhdf5-dev)");

@@ -71,7 +71,7 @@ class Decimator {
 };
 
 /// The channels of a model, in column order.
-std::vector<ChannelInfo> channels_of(const Model& m) { return channel_info(m, Workspace(m)); }
+std::vector<ChannelInfo> channels_of(const Model& m) { return channel_info(m); }
 
 /// Keeps every output of every channel (the ideal twin, compared sample by sample) and every
 /// channel's exact extrema over the run.
@@ -585,6 +585,7 @@ double mean_driver_speed(const Model& model, const Driver& d, double t0, double 
 Model ideal_model(const Model& model) {
   Model ideal = model;
   for (auto& j : ideal.joints) j.clearance.reset();
+  ideal.channels = channel_info(ideal, Workspace(ideal));  // no contact channels now
   return ideal;
 }
 

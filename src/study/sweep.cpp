@@ -577,7 +577,7 @@ StudySpec load_study_text(const std::string& text, const std::string& file,
   std::vector<std::string> names;
   for (const auto& [i, m] : loaded) {
     if (!m) continue;
-    for (const auto& c : channel_info(m->model, Workspace(m->model)))
+    for (const auto& c : channel_info(m->model))
       if (present.insert(c.name).second) names.push_back(c.name);
   }
   for (const auto* group : {&spec.channels, &spec.section_channels, &spec.series})

@@ -63,6 +63,11 @@ std::vector<ChannelInfo> channel_info(const Model& model, const Workspace& ws) {
   return info;
 }
 
+std::vector<ChannelInfo> channel_info(const Model& model) {
+  if (model.finalized) return model.channels;
+  return channel_info(model, Workspace(model));
+}
+
 void channel_values(const Model& model, const Workspace& ws, const Eigen::VectorXd& y,
                     double* values) {
   ChannelSink sink(values);

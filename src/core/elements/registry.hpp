@@ -16,10 +16,6 @@
 
 namespace lash {
 
-/// One output channel: `<element>.<quantity>`, its SI unit ("" dimensionless) and meaning.
-struct ChannelInfo {
-  std::string name, unit, description;
-};
 
 /// Collects channels: either their descriptions (once per model) or their values (per output).
 /// Elements call add() in a fixed order, so names and values cannot drift apart.
@@ -153,8 +149,11 @@ void driver_constrain(const Model&, const Workspace&, int d, double t, const dou
                       ConstraintOut& out);
 void driver_channels(const Model&, const Workspace&, int d, ChannelSink&);
 
-/// Every channel of a model in column order (without "time").
+/// Every channel of a model in column order (without "time"), listed by the elements of `ws`.
 std::vector<ChannelInfo> channel_info(const Model& model, const Workspace& ws);
+/// The same for a finalized model, as finalize() listed them (Model::channels); listed anew
+/// for a model not finalized.
+std::vector<ChannelInfo> channel_info(const Model& model);
 
 /// Fills `values` (size channel_info().size()) from a workspace evaluated at (t, y).
 void channel_values(const Model& model, const Workspace& ws, const Eigen::VectorXd& y,
