@@ -137,6 +137,28 @@ TEST(RunAnalysis, SubharmonicResponseGivesTwoPoincarePoints) {
   EXPECT_THROW(analyse(yaml, {}, o), std::invalid_argument);
 }
 
+TEST(RunAnalysis, APlaneSectionIsTakenOnlyWhereTheRunCrossesThePlane) {
+  // The constant-speed crank passes crank.phi = 20 rad once, at t = 20/ω = 38.2 ms, while the
+  // journal opens and closes its contact dozens of times. Every contact event after the crossing
+  // used to be taken for a section too (the plane's function, positive since the crossing, was
+  // the largest of the event functions), with both integrators.
+  const double omega = 5000 * 2 * M_PI / 60;
+  for (const char* integrator : {"dopri5", "bdf"}) {
+    SCOPED_TRACE(integrator);
+    AnalysisOptions o;
+    o.lyapunov = false;
+    o.section_planes = {"crank.phi=20"};
+    const Analysed a = analyse(read_file(example_path("flores_slider_crank.yaml")),
+                               {"solver.end_time=0.072", std::string("solver.integrator=") + integrator},
+                               o);
+    ASSERT_TRUE(a.run.result.status.ok) << a.run.result.status.message;
+    ASSERT_TRUE(a.run.poincare);
+    ASSERT_EQ(a.run.poincare->times.size(), 1u);
+    EXPECT_NEAR(a.run.poincare->times[0], 20.0 / omega, 1e-9);
+    EXPECT_GT(a.run.result.stats.events, 10);
+  }
+}
+
 TEST(RunAnalysis, FloresExampleResultsAreCompleteAndConsistent) {
   const Analysed a = analyse(read_file(example_path("flores_slider_crank.yaml")));
   const RunAnalysis& r = a.run;

@@ -115,7 +115,13 @@ class CvodeBdf final : public Integrator {
     if (flag == CV_ROOT_RETURN) {
       ++events_;
       t_ = t_ret;
-      return {Advance::event, t_ret, {}};
+      // The function that crossed: the lowest index among those CVODE found (all rising).
+      std::vector<int> found(p_.n_events, 0);
+      int which = -1;
+      if (CVodeGetRootInfo(mem_, found.data()) == CV_SUCCESS)
+        for (int k = 0; k < p_.n_events && which < 0; ++k)
+          if (found[k] != 0) which = k;
+      return {Advance::event, t_ret, {}, which};
     }
     if (flag < 0) {
       double t_cur = t_ret;

@@ -64,7 +64,7 @@ class Dopri5 final : public Integrator {
         if (pending_event_ && t_out >= t_event_) {
           dense(t_event_, y);
           ++stats_.events;
-          return {Advance::event, t_event_, {}};
+          return {Advance::event, t_event_, {}, event_k_};
         }
         if (t_out <= t_) {
           dense(t_out, y);
@@ -224,6 +224,7 @@ class Dopri5 final : public Integrator {
     g_old_ = g_new_;
     if (std::isfinite(best)) {
       t_event_ = best;
+      event_k_ = best_k;
       pending_event_ = true;
       redo_step_to(best, best_k);  // may move t_event_ just past the redone crossing
     }
@@ -321,6 +322,7 @@ class Dopri5 final : public Integrator {
   IntegratorOptions o_;
   IntegratorStats stats_;
   double t_ = 0.0, t_old_ = 0.0, h_ = 0.0, h_step_ = 0.0, t_event_ = 0.0;
+  int event_k_ = -1;  ///< the event function of the pending event
   bool have_step_ = false, need_k1_ = true, pending_event_ = false, end_evaluated_ = false;
   Eigen::VectorXd y_, k1_prev_, k1_, k2_, k3_, k4_, k5_, k6_, k7_, yt_, ynew_, r1_, r2_, r3_, r4_, r5_, ye_;
   Eigen::VectorXd g_old_, g_new_, g_tmp_;

@@ -41,6 +41,7 @@ struct Advance {
   enum Kind { reached, event, failure, stopped } kind = reached;
   double t = 0.0;           ///< time reached (t_out, the located event, the failure or stop time)
   std::string message;      ///< failure reason
+  int index = -1;           ///< event: the event function that rose through zero (-1: unknown)
 };
 
 class Integrator {

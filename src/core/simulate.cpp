@@ -226,9 +226,15 @@ bool Simulator::advance_to(double t_target, Observer* observer) try {
     event_functions(model_, ws_, y_.data(), g_event_.data());
     for (size_t p = 0; p < planes_.size(); ++p)
       g_event_[ws_.nc + p] = planes_[p].direction * (y_[planes_[p].index] - planes_[p].value);
-    int first = 0;
-    for (int c = 1; c < g_event_.size(); ++c)
-      if (g_event_[c] > g_event_[first]) first = c;
+    // The function the integrator located, else the one furthest past zero. (Not the largest
+    // g of all: a plane crossed long ago stays positive, in its own units, and would take every
+    // contact event for a section.)
+    int first = adv.index;
+    if (first < 0 || first >= g_event_.size()) {
+      first = 0;
+      for (int c = 1; c < g_event_.size(); ++c)
+        if (g_event_[c] > g_event_[first]) first = c;
+    }
     if (first >= ws_.nc) {
       if (observer) {
         evaluate(model_, ws_, adv.t, y_.data(), ydot_.data());
