@@ -137,6 +137,43 @@ TEST(RunAnalysis, SubharmonicResponseGivesTwoPoincarePoints) {
   EXPECT_THROW(analyse(yaml, {}, o), std::invalid_argument);
 }
 
+TEST(RunAnalysis, ContactModesCoverTheStatisticsWindow) {
+  // A sweep's metrics start after its transient (AnalysisOptions::stats_t0): so do the contact
+  // modes. They counted the start-up impacts too, which a sweep leaves out.
+  const std::string yaml = read_file(example_path("flores_slider_crank.yaml"));
+  const std::vector<std::string> run{"solver.end_time=0.048"};
+  AnalysisOptions o;
+  o.lyapunov = false;
+  o.ideal_twin = false;
+  const Model m = load_model_text(yaml, "t.yaml", run).model;
+  Recorder events(m);
+  const Analysed whole = analyse(yaml, run, o, &events);
+  o.stats_t0 = 0.024;
+  const Analysed late = analyse(yaml, run, o);
+  int all = 0, after = 0;
+  double vmax_after = 0;
+  for (const auto& e : events.events)
+    if (e.onset) {
+      ++all;
+      if (e.t >= 0.024) ++after, vmax_after = std::max(vmax_after, std::abs(e.velocity));
+    }
+  ASSERT_GT(all, after);
+  ASSERT_GT(after, 3);
+  EXPECT_EQ(whole.run.clearance[0].modes.impacts, all);
+  const ModeSummary& m2 = late.run.clearance[0].modes;
+  EXPECT_EQ(m2.impacts, after);
+  double vmax = 0;
+  for (double v : m2.impact_velocities) vmax = std::max(vmax, std::abs(v));
+  EXPECT_DOUBLE_EQ(vmax, vmax_after);
+  EXPECT_NEAR(m2.impact_share + m2.continuous_share + m2.free_flight_share, 1.0, 1e-12);
+  double in_contact = 0;
+  for (const auto& e : m2.episodes) {
+    EXPECT_GE(e.start, 0.024);
+    in_contact += e.end - e.start;
+  }
+  EXPECT_NEAR(m2.impact_share + m2.continuous_share, in_contact / 0.024, 1e-12);
+}
+
 TEST(RunAnalysis, APlaneSectionIsTakenOnlyWhereTheRunCrossesThePlane) {
   // The constant-speed crank passes crank.phi = 20 rad once, at t = 20/ω = 38.2 ms, while the
   // journal opens and closes its contact dozens of times. Every contact event after the crossing
