@@ -244,6 +244,26 @@ TEST(Cli, ProgressLineOnATerminal) {
   fs::remove_all(dir);
 }
 
+TEST(Cli, AContinuedRunIsNotAnalysedAsAWholeRun) {
+  // A folder written with --from holds t >= its start only; analyze and report made the run
+  // again from t = 0 and mixed that time into its sections and contact modes.
+  const fs::path first = temp_dir("whole_first"), cont = temp_dir("whole_cont");
+  ASSERT_EQ(run_lash("run " + example() + " -q -o " + first.string() +
+                     " --set solver.end_time=0.006").code, 0);
+  ASSERT_EQ(run_lash("run " + example() + " -q -o " + cont.string() +
+                     " --set solver.end_time=0.012 --from " + (first / "final_state.json").string())
+                .code,
+            0);
+  for (const char* command : {"analyze ", "report "}) {
+    const Result r = run_lash(command + cont.string());
+    EXPECT_EQ(r.code, 2) << command << r.out;
+    EXPECT_NE(r.out.find("a run continued from"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("holds t >= 0.006 s only"), std::string::npos) << r.out;
+  }
+  EXPECT_FALSE(fs::exists(cont / "analysis.json"));
+  EXPECT_EQ(run_lash("analyze " + first.string() + " --no-lyapunov").code, 0);
+}
+
 TEST(Cli, ReportAndAnalyzeAnEarlierRun) {
   const fs::path dir = temp_dir("analyze");
   ASSERT_EQ(run_lash("run " + example() + " -q -o " + dir.string()).code, 0);

@@ -197,6 +197,16 @@ RecordedRun read_run_folder(const std::string& dir, const Model& model) {
             "(status.outcome write_error at t = " + fmt_g(status.t) + " s: " + status.message +
             "), so they cover part of the run only; make room (or fix the folder) and run the "
             "model again");
+  // A continued run (--from) holds its own stretch of time only; the analyses make the run
+  // again from t = 0 (sections, the Lyapunov exponent, the ideal twin) and would mix in time
+  // that is not in the folder.
+  if (sum.contains("start") && sum["start"].is_object() && sum["start"].contains("from") &&
+      sum["start"]["from"].is_string())
+    damaged(summary_path + ": a run continued from " + sum["start"]["from"].get<std::string>() +
+            " (start.from), which holds t >= " +
+            fmt_g(sum["start"].value("time", 0.0)) + " s only; `analyze` and `report` take a "
+            "whole run from t = 0 (as `--from` with `--report` is refused): run the model from "
+            "its start, with the end_time you want");
   const json& output = member(sum, summary_path, "output");
   long long rows = 0;
   std::string file;
