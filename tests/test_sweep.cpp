@@ -382,6 +382,23 @@ TEST(StudyDatabase, KeepsRunsAndRefusesAnotherStudy) {
   fs::remove_all(dir);
 }
 
+TEST(StudyDatabase, ResumesHoweverTheStudyFilesPathIsSpelled) {
+  // The same study file named from another folder or by its absolute path: the model file it
+  // names is the same file, so --resume goes on. An edited model is still refused.
+  const fs::path dir = temp_dir("db_paths");
+  const std::string model = lash::test::read_file(example());
+  const std::string text = "study: t\nmodel: m.yaml\nparameters:\n  drivers.crank.speed_rpm: {values: [1000]}\n";
+  auto spelled = [&](const std::string& file, const std::string& m) {
+    return load_study_text(text, file, [&](const std::string&) { return m; });
+  };
+  { StudyDb db((dir / "study.db").string(), spelled("study.yaml", model), 1); }
+  EXPECT_NO_THROW(StudyDb((dir / "study.db").string(), spelled("/home/u/work/study.yaml", model), 1));
+  EXPECT_NO_THROW(StudyDb((dir / "study.db").string(), spelled("work/study.yaml", model), 1));
+  EXPECT_THROW(StudyDb((dir / "study.db").string(), spelled("work/study.yaml", model + "# edited\n"), 1),
+               std::invalid_argument);
+  fs::remove_all(dir);
+}
+
 TEST(Bifurcation, TheLogisticMapDoublesItsPeriodAtTheKnownParameters) {
   // x ← r x (1 − x): period 1 up to r = 3, period 2 up to 1 + √6 = 3.4495, period 4 up to
   // 3.5441 (May, Nature 261, 1976), chaos beyond the accumulation point 3.5699.

@@ -95,9 +95,18 @@ std::string now_utc() {
   return buf;
 }
 
-std::string model_texts_json(const StudySpec& spec) {
+/// The model files' texts by their paths as the study file names them (relative to its folder),
+/// so the same study resumes however its own path is spelled (absolute, from another folder);
+/// `as_given`: by the paths as this process spelled them (what older databases recorded).
+std::string model_texts_json(const StudySpec& spec, bool as_given = false) {
+  namespace fs = std::filesystem;
+  const fs::path base = fs::path(spec.file).parent_path();
   nlohmann::json j = nlohmann::json::object();
-  for (const auto& [path, text] : spec.model_texts) j[path] = text;
+  for (const auto& [path, text] : spec.model_texts) {
+    fs::path key = base.empty() || as_given ? fs::path(path) : fs::path(path).lexically_relative(base);
+    if (key.empty()) key = path;
+    j[key.string()] = text;
+  }
   return j.dump();
 }
 
@@ -165,7 +174,8 @@ StudyDb::StudyDb(const std::string& path, const StudySpec& spec, int total_runs)
                                     info["study_file"] +
                                     " as it was then); resuming would mix two studies: choose "
                                     "another output folder");
-      if (info["model_texts"] != model_texts_json(spec))
+      if (info["model_texts"] != model_texts_json(spec) &&
+          info["model_texts"] != model_texts_json(spec, true))
         throw std::invalid_argument(path + ": the model file(s) changed since this study began; "
                                     "resuming would mix two models: choose another output folder");
     }
