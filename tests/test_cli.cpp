@@ -264,6 +264,25 @@ TEST(Cli, AContinuedRunIsNotAnalysedAsAWholeRun) {
   EXPECT_EQ(run_lash("analyze " + first.string() + " --no-lyapunov").code, 0);
 }
 
+TEST(Cli, AStatisticsWindowWithoutAnOutputRowIsSaid) {
+  // Rows every 0.1 ms; a window of 10 µs between two of them: no statistics, and analyze says
+  // why instead of leaving the table empty without a word.
+  const fs::path dir = temp_dir("empty_window");
+  ASSERT_EQ(run_lash("run " + example() + " -q -o " + dir.string() +
+                     " --set solver.end_time=0.012 --set solver.output_interval=1e-4").code, 0);
+  const Result r = run_lash("analyze " + dir.string() + " --no-lyapunov --window 0.01001,0.01002");
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("skipped: statistics: no output row lies in the window (--window "
+                       "0.01001,0.01002 s)"),
+            std::string::npos)
+      << r.out;
+  const auto an = nlohmann::json::parse(std::ifstream(dir / "analysis.json"));
+  EXPECT_TRUE(an["statistics"].empty());
+  // A window that holds rows has its statistics and no such line.
+  const Result ok = run_lash("analyze " + dir.string() + " --no-lyapunov --window 0.005,0.01");
+  EXPECT_EQ(ok.out.find("no output row"), std::string::npos) << ok.out;
+}
+
 TEST(Cli, ReportAndAnalyzeAnEarlierRun) {
   const fs::path dir = temp_dir("analyze");
   ASSERT_EQ(run_lash("run " + example() + " -q -o " + dir.string()).code, 0);

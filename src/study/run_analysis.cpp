@@ -595,6 +595,17 @@ std::string fmt_g(double v) {
   std::snprintf(buf, sizeof buf, "%g", v);
   return buf;
 }
+
+/// Why the statistics table is empty ("" when it is not): no output row in its window.
+std::string no_statistics(const RunAnalysis& out, const AnalysisOptions& o) {
+  if (!out.statistics.empty()) return "";
+  std::string why = "statistics: no output row lies in the window";
+  if (o.stats_t0 > -1e299 || o.stats_t1 < 1e299)
+    why += " (--window " + fmt_g(std::max(o.stats_t0, 0.0)) + "," + fmt_g(o.stats_t1) + " s)";
+  if (!std::isnan(o.stats_angle0))
+    why += " (--angle-range " + fmt_g(o.stats_angle0) + "," + fmt_g(o.stats_angle1) + " deg)";
+  return why + "; widen it to hold at least one output";
+}
 }  // namespace
 
 void check_options(const AnalysisOptions& o) {
@@ -1099,6 +1110,8 @@ RunAnalysis analyze_run(const Model& model, const AnalysisOptions& o, Observer* 
                                     col.have_lyapunov_start ? &col.lyapunov_start : nullptr,
                                     col.lyapunov_t0, exact ? &*exact : nullptr);
   out.provenance.read.push_back("the main run's outputs, events and sections, observed while it ran");
+  if (const std::string none = no_statistics(out, o); !none.empty())
+    out.provenance.skipped.push_back(none);
   if (out.ideal_twin) out.provenance.resimulated.push_back("ideal twin: run beside the main run");
   if (out.lyapunov && out.lyapunov->estimated)
     out.provenance.resimulated.push_back("Lyapunov exponent: " + lyapunov_provenance(*out.lyapunov) +
@@ -1271,6 +1284,7 @@ RunAnalysis analyze_recorded_run(const Model& model, const AnalysisOptions& o, R
   if (out.lyapunov && out.lyapunov->estimated)
     prov.resimulated.push_back("Lyapunov exponent: " + lyapunov_provenance(*out.lyapunov) +
                                ", simulated now");
+  if (const std::string none = no_statistics(out, o); !none.empty()) prov.skipped.push_back(none);
   out.provenance = std::move(prov);
   return out;
 }
