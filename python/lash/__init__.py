@@ -57,18 +57,7 @@ def _yaml_value(value: Any) -> str:
 def _override_list(overrides: str | Iterable[str]) -> List[str]:
     """`overrides` as a list of "KEY.PATH=VALUE" strings: a single string is one override (not
     its characters); anything else must be an iterable of strings."""
-    if isinstance(overrides, str):
-        return [overrides]
-    try:
-        items = list(overrides)
-    except TypeError:
-        raise TypeError(f"overrides: expected a list of \"KEY.PATH=VALUE\" strings, got "
-                        f"{type(overrides).__name__}") from None
-    for o in items:
-        if not isinstance(o, str):
-            raise TypeError(f"overrides: expected \"KEY.PATH=VALUE\" strings, got {o!r} "
-                            f"({type(o).__name__})")
-    return items
+    return _strings("overrides", overrides, "\"KEY.PATH=VALUE\" strings")
 
 
 def _short(value: Any) -> str:
