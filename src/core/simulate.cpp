@@ -167,12 +167,12 @@ void Simulator::resume(const State& state) {
 
 State Simulator::snapshot() const { return {t_, y_, ws_.contact, integrator_->step_hint()}; }
 
-// A function-try-block: an expression failing mid-run (ExpressionError) is a numerical failure.
 void Simulator::set_interrupt(const std::atomic<int>* flag) {
   interrupt_ = flag;
   integrator_->set_stop_flag(flag);
 }
 
+// A function-try-block: an expression failing mid-run (ExpressionError) is a numerical failure.
 bool Simulator::advance_to(double t_target, Observer* observer) try {
   hook_steps(observer);
   while (t_ < t_target) {
