@@ -340,7 +340,9 @@ std::vector<ModelProblem> name_clashes(const Model& model,
     std::string what;     ///< how the message names it
   };
   std::vector<ModelProblem> out;
-  for (const auto& [name, channels] : twice) {
+  for (const auto& clash : twice) {
+    const std::string& name = clash.first;  // (a structured binding cannot be captured in C++17)
+    const std::vector<std::string>& channels = clash.second;
     std::vector<Owner> owners;
     // Generated elements come after the file's own (finalize appends them): the last body or
     // joint of a generated name is the generated one.
