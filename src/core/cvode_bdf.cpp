@@ -116,11 +116,11 @@ class CvodeBdf final : public Integrator {
       ++events_;
       t_ = t_ret;
       // The function that crossed: the lowest index among those CVODE found (all rising).
-      std::vector<int> found(p_.n_events, 0);
+      roots_found_.assign(p_.n_events, 0);
       int which = -1;
-      if (CVodeGetRootInfo(mem_, found.data()) == CV_SUCCESS)
+      if (CVodeGetRootInfo(mem_, roots_found_.data()) == CV_SUCCESS)
         for (int k = 0; k < p_.n_events && which < 0; ++k)
-          if (found[k] != 0) which = k;
+          if (roots_found_[k] != 0) which = k;
       return {Advance::event, t_ret, {}, which};
     }
     if (flag < 0) {
@@ -152,8 +152,8 @@ class CvodeBdf final : public Integrator {
   static constexpr int kStopped = 1000;
 
   /// CVode in CV_ONE_STEP mode, step by step up to t_out, calling the step hook (if any) after
-  /// each step and checking the stop flag before each: the steps are those of CV_NORMAL mode. A root located beyond t_out (one-step mode
-  /// searches the whole step) is kept and returned once t_out passes it, so that outputs and
+  /// each step and checking the stop flag before each: the steps are those of CV_NORMAL mode.
+  /// A root located beyond t_out (one-step mode searches the whole step) is kept and returned once t_out passes it, so that outputs and
   /// events come in time order as in CV_NORMAL mode. Returns CVode's flag; y_ holds the state
   /// at t_ret.
   int one_step_to(double t_out, double& t_ret) {
@@ -265,6 +265,7 @@ class CvodeBdf final : public Integrator {
   bool initialised_ = false;
   double t_ = 0.0;
   double t_step_ = 0.0;       ///< end of the last step taken in one-step mode
+  std::vector<int> roots_found_;  ///< CVodeGetRootInfo's answer at the last root
   bool root_pending_ = false; ///< one-step mode: a root at t_root_ not yet returned
   double t_root_ = 0.0;
   long events_ = 0;

@@ -339,6 +339,9 @@ std::vector<ModelProblem> name_clashes(const Model& model,
     std::string element;  ///< where the message points: "load 'hang'", "sensor 'probe'"
     std::string what;     ///< how the message names it
   };
+  std::vector<std::string> bodies, joints;
+  for (const Body& b : model.bodies) bodies.push_back(b.name);
+  for (const Joint& j : model.joints) joints.push_back(j.name);
   std::vector<ModelProblem> out;
   for (const auto& clash : twice) {
     const std::string& name = clash.first;  // (a structured binding cannot be captured in C++17)
@@ -349,10 +352,12 @@ std::vector<ModelProblem> name_clashes(const Model& model,
     auto add = [&](const char* kind, const std::vector<std::string>& names, const char* suffix,
                    const char* added) {
       const Sensor* sn = added_by(name, suffix);
-      const auto last = std::find(names.rbegin(), names.rend(), name);
-      for (auto it = names.begin(); it != names.end(); ++it) {
-        if (*it != name) continue;
-        if (sn && last != names.rend() && &*it == &*last)
+      size_t last = names.size();
+      for (size_t i = 0; i < names.size(); ++i)
+        if (names[i] == name) last = i;
+      for (size_t i = 0; i < names.size(); ++i) {
+        if (names[i] != name) continue;
+        if (sn && i == last)
           owners.push_back({"sensor '" + sn->name + "'", std::string(added) + " '" + name +
                                                              "' added by sensor '" + sn->name +
                                                              "' (its mass)"});
@@ -360,9 +365,6 @@ std::vector<ModelProblem> name_clashes(const Model& model,
           owners.push_back({std::string(kind) + " '" + name + "'", std::string(kind) + " '" + name + "'"});
       }
     };
-    std::vector<std::string> bodies, joints;
-    for (const Body& b : model.bodies) bodies.push_back(b.name);
-    for (const Joint& j : model.joints) joints.push_back(j.name);
     add("body", bodies, "_mass", "the point mass");
     add("joint", joints, "_mount", "the joint");
     for (const Driver& d : model.drivers)

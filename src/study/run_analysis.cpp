@@ -909,15 +909,13 @@ RunAnalysis analyze_samples(const Model& model, const AnalysisOptions& o, Plan& 
     ja.clearance = jt.clearance->clearance;
     ja.orbit = std::move(sa.orbit[c]);
     ja.continuous_contact_time = cont_time;
-    // Over the statistics window (a sweep's: after its transient), the whole run by default;
-    // the mode at the window's start is the last event's before it.
-    const double w0 = std::max(p.t_start, o.stats_t0), w1 = std::min(t_end, o.stats_t1);
-    const bool windowed = w0 < w1;
+    // Over the statistics window (a sweep's: after its transient; the whole run by default or
+    // when the window misses the run); the mode at its start is the last event's before it.
+    double w0 = std::max(p.t_start, o.stats_t0), w1 = std::min(t_end, o.stats_t1);
+    if (!(w0 < w1)) w0 = p.t_start, w1 = t_end;
     bool in_at_w0 = je.in_contact_at_start;
-    for (size_t k = 0; windowed && k < je.t.size() && je.t[k] < w0; ++k) in_at_w0 = je.onset[k];
-    ja.modes = windowed ? contact_modes(je.t, je.onset, je.v, in_at_w0, w0, w1, cont_time)
-                        : contact_modes(je.t, je.onset, je.v, je.in_contact_at_start, p.t_start,
-                                        t_end, cont_time);
+    for (size_t k = 0; k < je.t.size() && je.t[k] < w0; ++k) in_at_w0 = je.onset[k];
+    ja.modes = contact_modes(je.t, je.onset, je.v, in_at_w0, w0, w1, cont_time);
     // Histogram of impact velocities: 12 bins from 0 to the largest.
     double vmax = 0;
     for (double v : ja.modes.impact_velocities) vmax = std::max(vmax, v);
