@@ -171,9 +171,10 @@ TEST(Cli, CheckListsProblemsWithFileLineColumnAndExitsTwo) {
 
 TEST(Cli, RunWritesTheResultFiles) {
   const fs::path dir = temp_dir("run");
-  const Result r = run_lash("run " + example() + " -o " + dir.string());
+  const Result r = run_lash("run " + example() + " -o " + dir.string() + "/");
   ASSERT_EQ(r.code, 0) << r.out;
   EXPECT_NE(r.out.find("2401 outputs"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("outputs to " + dir.string() + "/ in"), std::string::npos) << r.out;
   EXPECT_EQ(r.out.find("\r"), std::string::npos) << "no progress line when not on a terminal";
   ASSERT_TRUE(fs::exists(dir / "timeseries.csv"));
   EXPECT_EQ(line_count(dir / "timeseries.csv"), 2402u);  // header + 0..0.024 s every 1e-5 s
@@ -307,8 +308,9 @@ TEST(Cli, ReportAndAnalyzeAnEarlierRun) {
   // options and applies them to the data the page and figures read; the same options give
   // analyze the same verdict.
   const std::string options = " --discard 0 --no-lyapunov --fft slider.ax";
-  r = run_lash("report " + dir.string() + options);
+  r = run_lash("report " + dir.string() + "//" + options);  // a folder's trailing slashes
   EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_EQ(r.out.find("//"), std::string::npos) << "paths printed as out//report.html\n" << r.out;
   EXPECT_TRUE(fs::exists(dir / "report.html"));
   EXPECT_TRUE(fs::exists(dir / "report_data.json"));
   const std::string html = lash::test::read_file((dir / "report.html").string());

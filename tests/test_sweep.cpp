@@ -552,9 +552,14 @@ TEST(SweepCli, AFailingRunIsRecordedAndTheRestComplete) {
   EXPECT_EQ(rows, (std::vector<std::string>{"0|completed", "1|error", "2|failed", "3|completed"}));
   const auto msg = query(dir / "out" / "study.db", "select message from runs where run = 1");
   EXPECT_NE(msg[0].find("clearance"), std::string::npos) << msg[0];
-  // The study's report names the failed runs with their errors.
-  r = lash_cmd("report " + (dir / "out").string());
+  // The study's report names the failed runs with their errors. It leaves no SQLite side files
+  // (a read-only connection to the WAL database created study.db-wal and -shm and could not
+  // remove them), and a folder given with a trailing slash is printed without a doubled one.
+  r = lash_cmd("report " + (dir / "out").string() + "/");
   ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_EQ(r.out.find("//"), std::string::npos) << r.out;
+  EXPECT_FALSE(fs::exists(dir / "out" / "study.db-wal"));
+  EXPECT_FALSE(fs::exists(dir / "out" / "study.db-shm"));
   const std::string html = lash::test::read_file((dir / "out" / "study_report.html").string());
   EXPECT_NE(html.find("<h2>Failed runs</h2><table>"), std::string::npos);
   EXPECT_NE(html.find("<svg"), std::string::npos);

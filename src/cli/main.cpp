@@ -134,7 +134,8 @@ int main(int argc, char** argv) {
       ->check(CLI::ExistingFile);
   run->add_option("-o,--output", out_dir,
                   "Output folder for timeseries.csv, events.csv, summary.json "
-                  "(default: out/<model file name without extension>)");
+                  "(default: out/<model file name without extension>)")
+      ->transform([](std::string f) { return lash::folder_name(std::move(f)); });
   run->add_option("--set", overrides,
                   "Override a model value before validation, KEY.PATH=VALUE, repeatable; "
                   "e.g. --set joints.rod_slider.clearance=0.25e-3 "
@@ -167,14 +168,16 @@ int main(int argc, char** argv) {
                 "report_data.json and figures/ into it");
   report->add_option("folder", run_dir, "A folder written by `lash run` (or by `lash sweep`: its study_report.html)")
       ->required()
-      ->check(CLI::ExistingDirectory);
+      ->check(CLI::ExistingDirectory)
+      ->transform([](std::string f) { return lash::folder_name(std::move(f)); });
 
   auto* analyze = app.add_subcommand(
       "analyze", "Nonlinear-dynamics analyses of an earlier run folder; prints them and writes "
                  "analysis.json");
   analyze->add_option("folder", run_dir, "A folder written by `lash run`")
       ->required()
-      ->check(CLI::ExistingDirectory);
+      ->check(CLI::ExistingDirectory)
+      ->transform([](std::string f) { return lash::folder_name(std::move(f)); });
   std::string poincare_driver;
   std::vector<std::string> fft_channels;
   bool no_lyapunov = false;

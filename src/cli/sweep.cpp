@@ -164,7 +164,8 @@ SweepCommand::SweepCommand(CLI::App& app, char** argv) : argv_(argv) {
       "sweep", "Run every case of a study file (docs/studies.md) on all cores, or on the processes "
                "of an MPI job; results in OUTPUT/study.db (SQLite), runs.csv and sections.csv");
   sub_->add_option("study", study_, "Study file (YAML)")->required();
-  sub_->add_option("-o,--output", out_, "Output folder (default: out/<study file name>)");
+  sub_->add_option("-o,--output", out_, "Output folder (default: out/<study file name>)")
+      ->transform([](std::string f) { return lash::folder_name(std::move(f)); });
   sub_->add_option("-j,--jobs", jobs_, "Runs at once on this machine (default: every core)")
       ->check(CLI::Range(1, 4096));
   sub_->add_flag("--resume", resume_,

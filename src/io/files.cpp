@@ -297,4 +297,9 @@ int run_program(const std::vector<std::string>& argv, const std::string& log_pat
   return -1;
 }
 
+std::string folder_name(std::string folder) {
+  while (folder.size() > 1 && folder.back() == '/') folder.pop_back();
+  return folder;
+}
+
 }  // namespace lash

@@ -100,6 +100,11 @@ constexpr const char* kFiguresMarker = ".lash-figures";
 /// naming the path; throws IoError when it cannot be read.
 std::string read_input_file(const std::string& path, std::size_t max_bytes);
 
+/// A folder's name as messages print it and paths are joined to it: `out/`, `out//` → `out`
+/// (the root `/` stays). Applied to every folder given on the command line, so no message says
+/// `out//summary.json`.
+std::string folder_name(std::string folder);
+
 /// Largest model file read (bytes): far above any mechanism's description.
 constexpr std::size_t kMaxModelFileBytes = 16u << 20;
 

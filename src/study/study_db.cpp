@@ -312,7 +312,16 @@ void StudyDb::export_csv(const std::string& folder) const {
 
 StudyTable read_study(const std::string& path) {
   sqlite3* db = nullptr;
-  if (sqlite3_open_v2(path.c_str(), &db, SQLITE_OPEN_READONLY, nullptr) != SQLITE_OK) {
+  // Read-write where it may (it writes nothing): a read-only connection to a WAL database
+  // creates study.db-wal and study.db-shm and cannot remove them when it closes, so they would
+  // be left beside a finished study. Read-only where the folder or file is not writable.
+  if (!std::filesystem::exists(path))
+    throw IoError(path, "cannot open the study database: no such file");
+  if (sqlite3_open_v2(path.c_str(), &db, SQLITE_OPEN_READWRITE, nullptr) != SQLITE_OK) {
+    sqlite3_close(db);
+    db = nullptr;
+  }
+  if (!db && sqlite3_open_v2(path.c_str(), &db, SQLITE_OPEN_READONLY, nullptr) != SQLITE_OK) {
     const std::string msg = db ? sqlite3_errmsg(db) : "out of memory";
     sqlite3_close(db);
     throw IoError(path, "cannot open the study database: " + msg);
