@@ -208,6 +208,12 @@ TEST(StudyFile, ProblemsAreLocatedInTheStudyFile) {
       problems("parameters:\n  drivers.crank.speed_rpm: {values: [1000]}\nkeep: {channels: [slider.axx]}\n");
   EXPECT_NE(channel.find("no channel 'slider.axx' in the model, did you mean 'slider.ax'?"), std::string::npos)
       << channel;
+  // Each unknown name at its own entry, in whichever list it is.
+  const std::string two = problems(
+      "parameters:\n  drivers.crank.speed_rpm: {values: [1000]}\nkeep:\n"
+      "  channels: [slider.ax, slider.axx]\n  series: {channels: [slider.x, slider.xx], points: 10}\n");
+  EXPECT_NE(two.find("s.yaml:6:25: keep: no channel 'slider.axx'"), std::string::npos) << two;
+  EXPECT_NE(two.find("s.yaml:7:33: keep: no channel 'slider.xx'"), std::string::npos) << two;
   EXPECT_NE(problems("parameters:\n  drivers.crank.speed_rpm: {from: 1, to: 2, count: 0}\n")
                 .find("count: expected a whole number from 1"),
             std::string::npos);

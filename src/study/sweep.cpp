@@ -580,13 +580,25 @@ StudySpec load_study_text(const std::string& text, const std::string& file,
     for (const auto& c : channel_info(m->model))
       if (present.insert(c.name).second) names.push_back(c.name);
   }
-  for (const auto* group : {&spec.channels, &spec.section_channels, &spec.series})
+  // Each unknown name is reported at its own entry (the list's first with that name).
+  const YAML::Node keep = root["keep"];
+  auto entry_of = [&](const YAML::Node& list, const std::string& c) -> YAML::Node {
+    if (list && list.IsSequence())
+      for (const auto& e : list)
+        if (e.IsScalar() && e.Scalar() == c) return e;
+    return list ? list : keep;
+  };
+  const std::pair<const std::vector<std::string>*, YAML::Node> groups[] = {
+      {&spec.channels, keep ? keep["channels"] : YAML::Node()},
+      {&spec.section_channels, keep ? keep["sections"] : YAML::Node()},
+      {&spec.series, keep && keep["series"] ? keep["series"]["channels"] : YAML::Node()}};
+  for (const auto& [group, list] : groups)
     for (const auto& c : *group)
       if (!present.count(c)) {
         const std::string near = closest_match(c, names);
-        r.error(root["keep"], "keep: no channel '" + c + "' in the model" +
-                                  (near.empty() ? "" : ", did you mean '" + near + "'?") +
-                                  " (nor in any other run's checked)");
+        r.error(entry_of(list, c), "keep: no channel '" + c + "' in the model" +
+                                       (near.empty() ? "" : ", did you mean '" + near + "'?") +
+                                       " (nor in any other run's checked)");
       }
   if (!r.list.empty()) throw ModelError(r.list);
   return spec;
