@@ -502,6 +502,24 @@ TEST(Cli, ExpressionFailingMidRunExitsOneWithASummary) {
   fs::remove_all(dir);
 }
 
+TEST(Cli, AFailureWithoutClearanceJointsStillGivesTheState) {
+  // A force that grows without bound at t = 2 ms: the integrator gives up there. Without a
+  // clearance joint to describe, the message names the body with the largest acceleration
+  // (it ended in "state: " and nothing).
+  const fs::path dir = temp_dir("blowup");
+  fs::create_directories(dir);
+  std::ofstream(dir / "m.yaml") << "gravity: [0, 0]\nbodies:\n  block: {mass: 2.0, inertia: 1e-3}\n"
+                                   "loads:\n  push: {type: force, point: block, fx: \"1/(2e-3 - time)^3\", fy: \"0\"}\n"
+                                   "solver: {end_time: 0.01, output_interval: 1e-4, initial_state: given}\n";
+  const Result r = run_lash("run " + (dir / "m.yaml").string() + " -q -o " + (dir / "out").string());
+  EXPECT_EQ(r.code, 1) << r.out;
+  EXPECT_NE(r.out.find("step size underflow"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("; state: body 'block' (the largest acceleration): position ("), std::string::npos) << r.out;
+  const std::string message = read_summary(dir / "out")["status"]["message"];
+  EXPECT_NE(message.find("m/s^2"), std::string::npos) << message;
+  fs::remove_all(dir);
+}
+
 TEST(Cli, RunContinuesFromASavedStateTimeAndAll) {
   const fs::path dir = temp_dir("from");
   const fs::path a = dir / "a", b = dir / "b", bad = dir / "bad";

@@ -31,6 +31,9 @@ constexpr double kEventBurstSpan = 1e-12;
 /// A gap beyond this (m) on the wrong side of a joint's mode is a missed crossing.
 constexpr double kModeTolerance = 1e-12;
 
+/// The state a failure message gives: each clearance joint's gap, speed and force; without
+/// clearance joints, the body with the largest acceleration (its position, velocity and
+/// acceleration at the last evaluation).
 std::string describe_contacts(const Model& model, const Workspace& ws) {
   std::ostringstream s;
   for (int k = 0; k < ws.nc; ++k) {
@@ -39,6 +42,19 @@ std::string describe_contacts(const Model& model, const Workspace& ws) {
       << "': delta = " << o.delta << " m, delta_dot = " << o.delta_dot << " m/s, Fn = " << o.f_n
       << " N";
   }
+  if (ws.nc > 0 || ws.nb == 0) return s.str();
+  int fastest = 0;
+  double largest = -1.0;
+  for (int b = 0; b < ws.nb; ++b) {
+    const int o = ws.blocks[b].offset;
+    const double a = std::hypot(ws.qdd[o], ws.qdd[o + 1]);
+    if (!(a <= largest)) largest = a, fastest = b;  // a NaN acceleration is the one to name
+  }
+  const BodyKin& k = ws.kin[fastest];
+  const int o = ws.blocks[fastest].offset;
+  s << "body '" << model.bodies[fastest].name << "' (the largest acceleration): position ("
+    << k.r.x() << ", " << k.r.y() << ") m, velocity (" << k.v.x() << ", " << k.v.y()
+    << ") m/s, acceleration (" << ws.qdd[o] << ", " << ws.qdd[o + 1] << ") m/s^2";
   return s.str();
 }
 
