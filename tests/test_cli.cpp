@@ -743,7 +743,9 @@ TEST(Cli, AnalysisOptionsAreRangeChecked) {
       {"analyze --lyapunov-d0 nan", "--lyapunov-d0 nan: expected a separation > 0 m"},
       {"analyze --lyapunov-method qr", "--lyapunov-method qr: expected variational or two-trajectory"},
       {"analyze --plane slider.x=nan", "value 'nan' is not a finite number"},
-      {"report --angle-range 0,inf", "--angle-range 0,inf: both angles must be finite"}};
+      {"report --angle-range 0,inf", "--angle-range 0,inf: both angles must be finite"},
+      // Sections and renormalisations without bound (1e-9 ran out of memory).
+      {"analyze --period 1e-9", "--period 1e-09: shorter than the run's output interval (1e-05 s)"}};
   for (const auto& [args, message] : cases) {
     const auto space = args.find(' ');
     const Result r = run_lash(args.substr(0, space) + " " + dir.string() + args.substr(space));

@@ -677,6 +677,15 @@ Plan plan_analysis(const Model& model, const AnalysisOptions& o) {
   if (!o.poincare_driver.empty() && !p.drv)
     throw std::invalid_argument("--poincare " + o.poincare_driver +
                                 ": no revolute driver of that name");
+  // A period below the output interval: the time series cannot resolve one period, and the
+  // sections (one per period) and the exponent's renormalisations (20 per period) would number
+  // more than the rows the run holds — without bound as the period shrinks.
+  if (o.period > 0 && o.period < s.output_interval)
+    throw std::invalid_argument("--period " + fmt_g(o.period) +
+                                ": shorter than the run's output interval (" +
+                                fmt_g(s.output_interval) +
+                                " s), which cannot resolve one period; expected at least " +
+                                fmt_g(s.output_interval) + " s");
   if (o.period > 0) {
     p.period = o.period;
     p.period_source = "--period " + fmt_g(o.period) + " s";
