@@ -260,14 +260,20 @@ class Model:
         """The model file's text, overrides not applied."""
         return self._text if self._text is not None else _lash.emit_yaml(self._data)
 
-    def compiled(self, extra_overrides: str | Sequence[str] = ()):
-        """The model loaded and validated by the C++ loader (cached); raises ModelError."""
+    def compiled(self, extra_overrides: str | Sequence[str] = (),
+                 keywords: Optional[Dict[str, str]] = None):
+        """The model loaded and validated by the C++ loader (cached); raises ModelError.
+        `keywords` (model path -> argument name) names the overrides a function's keyword
+        arguments made after those arguments in the error."""
         name = _message_name(self.filename)
-        if extra_overrides:
-            return _lash.load_text(self.text(), name,
-                                   self.overrides + _override_list(extra_overrides))
-        if self._compiled is None:
-            self._compiled = _lash.load_text(self.text(), name, self.overrides)
+        try:
+            if extra_overrides:
+                return _lash.load_text(self.text(), name,
+                                       self.overrides + _override_list(extra_overrides))
+            if self._compiled is None:
+                self._compiled = _lash.load_text(self.text(), name, self.overrides)
+        except ModelError as e:
+            raise _python_diagnostics(e, keywords or {}) from None
         return self._compiled
 
     def check(self) -> "Model":
@@ -325,7 +331,10 @@ def load(path: str | bytes | os.PathLike, overrides: str | Iterable[str] = ()) -
         text = None
     if text is None:
         # The loader's ModelError, with line and column: "not UTF-8 text (byte 0xE9)".
-        _lash.load_text(data, name, _override_list(overrides))
+        try:
+            _lash.load_text(data, name, _override_list(overrides))
+        except ModelError as e:
+            raise _python_diagnostics(e, {}) from None
         error = ModelError(f"{name}: not UTF-8 text")  # the loader found nothing wrong
         error.diagnostics = [(name, 0, 0, "", "not UTF-8 text")]
         raise error
@@ -513,24 +522,29 @@ def _run_overrides(t_end: Optional[float], output_interval: Optional[float],
     return extra
 
 
-def _keyword_diagnostics(error: ModelError, keywords: Dict[str, str]) -> ModelError:
-    """`error` with the overrides that keyword arguments made (`keywords`: model path ->
-    argument) named as those arguments, "t_end (solver.end_time)", not as the CLI's
-    "--set solver.end_time"; the same error when none of them is named."""
+def _python_diagnostics(error: ModelError, keywords: Dict[str, str]) -> ModelError:
+    """`error` in Python's terms. The C++ loader names an override as the CLI's option,
+    "--set solver.end_time", and a value it set "(value set with --set)". Here an override
+    that a keyword argument made (`keywords`: model path -> argument) is named as that
+    argument, "t_end (solver.end_time)", and any other (Model.set, an `overrides` string) as
+    "override solver.end_time", "(value set by an override)". The same error when it names no
+    override."""
     set_with = " (value set with --set)"  # the loader's note on a value from an override
     diagnostics, changed = [], False
     for file, line, column, element, message in error.diagnostics:
         if file.startswith("--set ") and file[len("--set "):] in keywords:
             path = file[len("--set "):]
             file, changed = f"{keywords[path]} ({path})", True
-        elif element == "solver" and message.endswith(set_with):
-            # The key the message is about opens it: "output_interval must be > 0",
-            # "'end_time' must be a number", "unknown integrator 'rk4'".
+        elif file == "--set" or file.startswith("--set "):
+            file, changed = "override" + file[len("--set"):], True
+        if message.endswith(set_with):
+            # A solver value: the key the message is about opens it ("output_interval must be
+            # > 0", "'end_time' must be a number", "unknown integrator 'rk4'").
             named = [k for p, k in keywords.items()
-                     if re.match(rf"(unknown )?'?{p.split('.')[-1]}\b", message)]
-            if named:
-                message = message[:-len(set_with)] + f" (value of the argument {named[0]})"
-                changed = True
+                     if element == "solver" and re.match(rf"(unknown )?'?{p.split('.')[-1]}\b", message)]
+            message = message[:-len(set_with)] + (f" (value of the argument {named[0]})" if named
+                                                  else " (value set by an override)")
+            changed = True
         diagnostics.append((file, line, column, element, message))
     if not changed:
         return error
@@ -558,18 +572,12 @@ def simulate(model: Model | str | os.PathLike, t_end: Optional[float] = None, *,
     exists."""
     model = _as_model(model)
     extra = _run_overrides(t_end, output_interval, integrator, overrides)
-    try:
-        compiled = model.compiled(extra)
-    except ModelError as e:
-        # A path the caller also set in an override string keeps its "--set" name.
-        set_by_caller = {o.split("=", 1)[0] for o in model.overrides + _override_list(overrides)}
-        given = {"t_end": t_end, "output_interval": output_interval, "integrator": integrator}
-        keywords = {p: k for p, k in _RUN_KEYWORDS.items()
-                    if given[k] is not None and p not in set_by_caller}
-        renamed = _keyword_diagnostics(e, keywords)
-        if renamed is e:
-            raise
-        raise renamed from None
+    # A path the caller also set in an override string keeps the name "override".
+    set_by_caller = {o.split("=", 1)[0] for o in model.overrides + _override_list(overrides)}
+    given = {"t_end": t_end, "output_interval": output_interval, "integrator": integrator}
+    keywords = {p: k for p, k in _RUN_KEYWORDS.items()
+                if given[k] is not None and p not in set_by_caller}
+    compiled = model.compiled(extra, keywords)
     return Result(model, compiled, _lash.simulate(compiled))
 
 

@@ -294,9 +294,21 @@ def test_messages_name_what_was_passed(tmp_path):
     with pytest.raises(lash.ModelError, match=r"unknown integrator 'rk4'.*\(value of the argument "
                        r"integrator\)\n$"):
         lash.simulate(FLORES, t_end=0.0005, integrator="rk4")
-    # The caller's own override string keeps its name.
-    with pytest.raises(lash.ModelError, match="^--set solver.end_time: no 'solver'"):
+    # The caller's own override string keeps its name: an override, not the CLI's --set.
+    with pytest.raises(lash.ModelError, match="^override solver.end_time: no 'solver'"):
         lash.simulate(lash.Model.new("x"), overrides="solver.end_time=1")
+    # So do the values Model.set and load's overrides change.
+    bad = lash.load(FLORES).set("joints.rod_slider.clearance", -1)
+    with pytest.raises(lash.ModelError) as err:
+        bad.check()
+    assert str(err.value).endswith("joint 'rod_slider': clearance must be >= 0, got -1 "
+                                   "(value set by an override)\n"), str(err.value)
+    assert "--set" not in str(err.value)
+    with pytest.raises(lash.ModelError, match="^override joints.rod_slidr.clearance: no "
+                       "'joints.rod_slidr' in the model, did you mean 'rod_slider'"):
+        lash.load(FLORES, overrides="joints.rod_slidr.clearance=1")
+    with pytest.raises(lash.ModelError, match="^override: expected KEY.PATH=VALUE, got 'x'"):
+        lash.load(FLORES, overrides="x")
     result = lash.simulate(FLORES, t_end=0.0005)
     with pytest.raises(TypeError, match="channel name such as 'crank.x', got 0 \\(int\\)"):
         result[0]
