@@ -452,6 +452,37 @@ TEST(State, AClearanceJointsPartThatCannotBeIsRefusedAndAChangedGapIsSaid) {
   State unsaved = saved;
   unsaved.gaps.clear();
   EXPECT_TRUE(resume_warnings(tighter, wt, unsaved).empty());
+  // A mode the gap contradicts (edited by hand: free flight 4 µm into the wall) starts as the
+  // gap says, and is said; the safety net then has no missed crossing to count.
+  State edited = unsaved;
+  edited.modes[0].in_contact = false;
+  const auto said = resume_warnings(next, wn, edited);
+  ASSERT_EQ(said.size(), 1u);
+  EXPECT_NE(said[0].find("joint 'rod_slider': the continued state's mode is free flight but its "
+                         "gap is 4."),
+            std::string::npos)
+      << said[0];
+  EXPECT_NE(said[0].find("the run starts in contact"), std::string::npos) << said[0];
+  from.from = &edited;
+  Recorder re(next);
+  const RunResult fixed = simulate(next, wn, re, {}, {}, from);
+  ASSERT_TRUE(fixed.status.ok) << fixed.status.message;
+  EXPECT_EQ(wn.missed_events, 0);
+  // Under a clearance 0.1 mm larger the saved contact is 96 µm of free flight: both are said.
+  Model looser = load_model_file(example_path("flores_slider_crank.yaml"),
+                                 {"solver.end_time=0.007", "joints.rod_slider.clearance=0.6e-3"})
+                     .model;
+  Workspace wl(looser);
+  from.from = &saved;
+  Recorder rl(looser);
+  const RunResult loose = simulate(looser, wl, rl, {}, {}, from);
+  ASSERT_TRUE(loose.status.ok) << loose.status.message;
+  ASSERT_EQ(loose.warnings.size(), 2u);
+  EXPECT_NE(loose.warnings[0].find("mode is contact but its gap is -9.5"), std::string::npos)
+      << loose.warnings[0];
+  EXPECT_NE(loose.warnings[1].find("the continued state's gap is -9.5"), std::string::npos)
+      << loose.warnings[1];
+  EXPECT_EQ(wl.missed_events, 0);
 }
 
 TEST(Finalize, ChecksModelsBuiltInCode) {

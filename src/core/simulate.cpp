@@ -31,6 +31,12 @@ constexpr double kEventBurstSpan = 1e-12;
 /// A gap beyond this (m) on the wrong side of a joint's mode is a missed crossing.
 constexpr double kModeTolerance = 1e-12;
 
+/// A contact mode the gap δ contradicts by more than round-off: in contact with δ < 0 (free),
+/// or free with δ > 0 (pressed in).
+bool mode_contradicts(bool in_contact, double delta) {
+  return in_contact ? delta < -kModeTolerance : delta > kModeTolerance;
+}
+
 /// The state a failure message gives: each clearance joint's gap, speed and force; without
 /// clearance joints, the body with the largest acceleration (its position, velocity and
 /// acceleration at the last evaluation).
@@ -177,6 +183,13 @@ void Simulator::resume(const State& state) {
   ws_.contact = state.modes;
   t_ = state.t;
   y_ = state.y;
+  for (int k = 0; k < ws_.nc; ++k) {
+    double delta, delta_dot;
+    clearance_gap(model_, ws_, k, y_.data(), delta, delta_dot);
+    if (!mode_contradicts(ws_.contact[k].in_contact, delta)) continue;
+    ws_.contact[k].in_contact = delta > 0.0;
+    if (delta > 0.0) y_[ws_.aux_impact[k]] = std::abs(delta_dot);
+  }
   status_ = RunStatus{};
   integrator_->reset(t_, y_, state.step);
 }
@@ -225,7 +238,7 @@ bool Simulator::advance_to(double t_target, Observer* observer) try {
         double delta, delta_dot;
         clearance_gap(model_, ws_, c, y_.data(), delta, delta_dot);
         const ContactState& cs = ws_.contact[c];
-        if ((cs.in_contact && delta < -kModeTolerance) || (!cs.in_contact && delta > kModeTolerance)) {
+        if (mode_contradicts(cs.in_contact, delta)) {
           clearance_event(model_, ws_, c, y_);
           if (cs.in_contact) y_[ws_.aux_impact[c]] = std::max(delta_dot, 0.0);
           ++ws_.missed_events;
@@ -394,6 +407,19 @@ std::string resume_problem(const Model& model, Workspace& ws, const State& state
 
 std::vector<std::string> resume_warnings(const Model& model, Workspace& ws, const State& state) {
   std::vector<std::string> out;
+  for (int c = 0; c < ws.nc && static_cast<int>(state.modes.size()) == ws.nc; ++c) {
+    double delta, delta_dot;
+    clearance_gap(model, ws, c, state.y.data(), delta, delta_dot);
+    if (!mode_contradicts(state.modes[c].in_contact, delta)) continue;
+    char msg[400];
+    std::snprintf(msg, sizeof msg,
+                  "joint '%s': the continued state's mode is %s but its gap is %.6g m; the run "
+                  "starts %s, as the gap says",
+                  model.joints[ws.clearance_joints[c]].name.c_str(),
+                  state.modes[c].in_contact ? "contact" : "free flight", delta,
+                  delta > 0.0 ? "in contact" : "in free flight");
+    out.push_back(msg);
+  }
   if (static_cast<int>(state.gaps.size()) != ws.nc) return out;
   for (int c = 0; c < ws.nc; ++c) {
     const Joint& j = model.joints[ws.clearance_joints[c]];

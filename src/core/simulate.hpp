@@ -136,7 +136,10 @@ class Simulator {
   /// Starts from y at time t; each joint's mode follows the sign of its gap (δ̇⁻ = |δ̇| if in
   /// contact), or `modes` (e.g. a nearby trajectory's) where they agree with that sign.
   void start(double t, const Eigen::VectorXd& y, const std::vector<ContactState>* modes = nullptr);
-  /// Continues from a saved state exactly: its modes and its step size as they are.
+  /// Continues from a saved state exactly: its modes and its step size as they are, except a
+  /// mode that contradicts its joint's gap by more than round-off (a state edited by hand, or
+  /// saved under another clearance): that joint starts in the mode of its gap (resume_warnings
+  /// says so), with δ̇⁻ = |δ̇| if that is contact.
   void resume(const State& state);
   /// The current state, ready to be saved and resumed.
   State snapshot() const;
@@ -188,7 +191,7 @@ std::string resume_problem(const Model& model, Workspace& ws, const State& state
 
 /// What is odd but allowed in continuing from `state`: a clearance joint whose gap differs from
 /// the one saved with the state (the model's clearance or geometry changed since), with the
-/// contact force it then starts with.
+/// contact force it then starts with; a mode that contradicts the gap (corrected by resume).
 std::vector<std::string> resume_warnings(const Model& model, Workspace& ws, const State& state);
 
 /// Parses "<body>.<x|y|phi|vx|vy|omega>=VALUE[,down]" into a plane; throws
