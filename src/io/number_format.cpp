@@ -32,7 +32,13 @@ bool scale(double a, int e, double& m) {
 
 char* format_g9(double v, char* out) {
   const double a = std::fabs(v);
-  if (!(a >= 1e-14 && a < 1e31)) return slow(v, out);  // also 0, inf, NaN
+  if (a == 0.0) {  // many columns hold exact zeros (a guide's y, a ground-fixed angle)
+    char* p = out;
+    if (std::signbit(v)) *p++ = '-';
+    *p++ = '0';
+    return p;
+  }
+  if (!(a >= 1e-14 && a < 1e31)) return slow(v, out);  // also inf, NaN
   // Decimal exponent estimate from the binary one (a is normal here): floor(log10(2)·e2),
   // corrected below when it is one off.
   std::uint64_t bits;
