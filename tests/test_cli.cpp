@@ -265,23 +265,44 @@ TEST(Cli, AContinuedRunIsNotAnalysedAsAWholeRun) {
   EXPECT_EQ(run_lash("analyze " + first.string() + " --no-lyapunov").code, 0);
 }
 
-TEST(Cli, AStatisticsWindowWithoutAnOutputRowIsSaid) {
-  // Rows every 0.1 ms; a window of 10 µs between two of them: no statistics, and analyze says
-  // why instead of leaving the table empty without a word.
+TEST(Cli, AStatisticsWindowWithoutAnOutputRowKeepsItsExactExtrema) {
+  // Rows every 0.1 ms; a window of 10 µs between two of them. Its min, max and peak are the
+  // exact ones (the run made again, tracked between outputs); RMS and crest factor need rows,
+  // and analyze says so instead of leaving them out without a word.
   const fs::path dir = temp_dir("empty_window");
   ASSERT_EQ(run_lash("run " + example() + " -q -o " + dir.string() +
                      " --set solver.end_time=0.012 --set solver.output_interval=1e-4").code, 0);
   const Result r = run_lash("analyze " + dir.string() + " --no-lyapunov --window 0.01001,0.01002");
   EXPECT_EQ(r.code, 0) << r.out;
-  EXPECT_NE(r.out.find("skipped: statistics: no output row lies in the window (--window "
-                       "0.01001,0.01002 s)"),
+  EXPECT_NE(r.out.find("skipped: statistics: RMS and crest factor: no output row lies in the "
+                       "window (--window 0.01001,0.01002 s); min, max and peak are the exact ones"),
             std::string::npos)
       << r.out;
-  const auto an = nlohmann::json::parse(std::ifstream(dir / "analysis.json"));
-  EXPECT_TRUE(an["statistics"].empty());
+  const auto an = nlohmann::json::parse(std::ifstream(dir / "analysis.json"))["statistics"];
+  // The same window sampled every µs (its own rows, and its exact extrema): the same extremes.
+  const fs::path fine = temp_dir("fine_window");
+  ASSERT_EQ(run_lash("run " + example() + " -q -o " + fine.string() +
+                     " --set solver.end_time=0.012 --set solver.output_interval=1e-6").code, 0);
+  ASSERT_EQ(run_lash("analyze " + fine.string() + " --no-lyapunov --window 0.01001,0.01002").code, 0);
+  const auto ref = nlohmann::json::parse(std::ifstream(fine / "analysis.json"))["statistics"];
+  for (const char* ch : {"slider.x", "slider.vx", "crank.phi", "rod.omega"}) {
+    SCOPED_TRACE(ch);
+    ASSERT_TRUE(an.contains(ch));
+    EXPECT_EQ(an[ch]["extrema"], "exact");
+    EXPECT_TRUE(an[ch]["rms"].is_null());
+    EXPECT_TRUE(an[ch]["crest"].is_null());
+    const double scale = std::abs(ref[ch]["peak"].get<double>());
+    EXPECT_NEAR(an[ch]["min"].get<double>(), ref[ch]["min"].get<double>(), 1e-6 * scale);
+    EXPECT_NEAR(an[ch]["max"].get<double>(), ref[ch]["max"].get<double>(), 1e-6 * scale);
+    EXPECT_LT(an[ch]["min"].get<double>(), an[ch]["max"].get<double>());  // it moved in 10 µs
+    EXPECT_GE(an[ch]["t_min"].get<double>(), 0.01001);
+    EXPECT_LE(an[ch]["t_max"].get<double>(), 0.01002);
+  }
   // A window that holds rows has its statistics and no such line.
   const Result ok = run_lash("analyze " + dir.string() + " --no-lyapunov --window 0.005,0.01");
   EXPECT_EQ(ok.out.find("no output row"), std::string::npos) << ok.out;
+  fs::remove_all(dir);
+  fs::remove_all(fine);
 }
 
 TEST(Cli, ReportAndAnalyzeAnEarlierRun) {

@@ -597,14 +597,19 @@ std::string fmt_g(double v) {
 }
 
 /// Why the statistics table is empty ("" when it is not): no output row in its window.
+/// With no output row in the window but exact extrema, only RMS and crest factor are missing.
 std::string no_statistics(const RunAnalysis& out, const AnalysisOptions& o) {
-  if (!out.statistics.empty()) return "";
-  std::string why = "statistics: no output row lies in the window";
+  const bool extrema_only = !out.statistics.empty() && out.statistics.front().samples == 0;
+  if (!out.statistics.empty() && !extrema_only) return "";
+  std::string why = extrema_only ? "statistics: RMS and crest factor: no output row lies in the window"
+                                 : "statistics: no output row lies in the window";
   if (o.stats_t0 > -1e299 || o.stats_t1 < 1e299)
     why += " (--window " + fmt_g(std::max(o.stats_t0, 0.0)) + "," + fmt_g(o.stats_t1) + " s)";
   if (!std::isnan(o.stats_angle0))
     why += " (--angle-range " + fmt_g(o.stats_angle0) + "," + fmt_g(o.stats_angle1) + " deg)";
-  return why + "; widen it to hold at least one output";
+  return why + (extrema_only ? "; min, max and peak are the exact ones, tracked between outputs; "
+                               "widen the window to hold an output for the others"
+                             : "; widen it to hold at least one output");
 }
 }  // namespace
 
@@ -863,7 +868,24 @@ RunAnalysis analyze_samples(const Model& model, const AnalysisOptions& o, Plan& 
   // Statistics and the comparison with the ideal twin.
   for (size_t i = 0; i < sa.channels.size(); ++i) {
     const ChannelStats& c = sa.stats[i];
-    if (c.n == 0) continue;
+    if (c.n == 0) {
+      // No output row in the window (narrower than the output interval): its exact extrema,
+      // tracked between the outputs, are kept; RMS and crest factor need samples (NaN: null).
+      if (!exact || !std::isnan(o.stats_angle0)) continue;
+      const auto e = exact->find(sa.channels[i].name);
+      if (e == exact->end()) continue;
+      ChannelStatistics st;
+      st.channel = sa.channels[i].name;
+      st.min = e->second.min, st.t_min = e->second.t_min;
+      st.max = e->second.max, st.t_max = e->second.t_max;
+      st.exact = true;
+      st.peak = std::max(std::abs(st.min), std::abs(st.max));
+      st.rms = st.crest = std::nan("");
+      st.t0 = std::max(o.stats_t0, 0.0);
+      st.t1 = std::min(o.stats_t1, s.end_time);
+      out.statistics.push_back(st);
+      continue;
+    }
     ChannelStatistics st;
     st.channel = sa.channels[i].name;
     st.samples = c.n;
