@@ -67,7 +67,6 @@ class ResultsWriter : public Observer {
     double contact_time = 0.0, onset_time = 0.0, max_impact_velocity = 0.0;
     bool in_contact = false;
   };
-  void append_number(double v);  ///< %.9g into row_
   void write_rows(RowFile& file, std::string_view rows);  ///< records the first error
   /// After the time series has written a block out: the events buffered so far too, so that a
   /// killed run or a full disk leaves both files up to about the same time.
@@ -89,7 +88,9 @@ class ResultsWriter : public Observer {
   std::vector<double> picked_;         ///< their values at this output (HDF5)
   std::unique_ptr<Hdf5Series> h5_;     ///< with OutputFormat::hdf5, instead of the CSV
   std::vector<double> values_;
-  fmt::memory_buffer row_;
+  /// One CSV row: room for time and every selected value at kG9MaxChars + 1 each, so numbers
+  /// are formatted straight into it.
+  std::vector<char> row_;
   ChannelExtrema extrema_;
   std::vector<JointStats> joints_;
   long rows_ = 0;
