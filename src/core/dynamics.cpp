@@ -185,9 +185,11 @@ inline void read_kin(BodyKin& k, int nq, const double* y, double* store = nullpt
   k.r = Vec2(y[bl.offset], y[bl.offset + 1]);
   k.v = Vec2(y[nq + bl.offset], y[nq + bl.offset + 1]);
   if (bl.rot >= 0) {
-    k.phi = y[bl.rot];
+    // k.A is rotation(k.phi) at every moment (a new BodyKin: 0 and I), so an unchanged angle
+    // (a slider's on its guide) keeps its matrix without another sincos.
+    const double phi = y[bl.rot];
+    if (phi != k.phi) k.A = rotation(phi), k.phi = phi;
     k.omega = y[nq + bl.rot];
-    k.A = rotation(k.phi);
   }
 }
 
