@@ -184,6 +184,22 @@ TEST(Expression, ErrorsNameTheProblem) {
   EXPECT_EQ(check_expression("rod.x + 1", {"rod"}), "");
 }
 
+TEST(Expression, AssignmentsAndListsAreRefusedComparisonsKept) {
+  // muparser would assign: `t=0.001 ? 100 : 0` set the time every later expression read (a
+  // second load's `1000*t` gave 1e5 at every row), `rod.x=0` a body's coordinate.
+  for (const char* text : {"t=0.001 ? 100 : 0", "(rod.x=0)*0", "time+=1", "time*=2", "a = 1"})
+    EXPECT_NE(check_expression(text, {"rod"}).find("would assign to a variable"), std::string::npos)
+        << text;
+  EXPECT_NE(check_expression("1, 2", {}).find("a list of 2"), std::string::npos);
+  for (const char* text : {"t == 1", "t<=2 && t>=1", "t != 3 ? 1 : 0", "step(t, 0, 0, 1, 2)"})
+    EXPECT_EQ(check_expression(text, {}), "") << text;
+  // Nothing was evaluated on the way: the time a refused expression names is untouched.
+  ExpressionVariables vars;
+  vars.time = 0.5;
+  EXPECT_THROW(Expression("t=7", vars), std::invalid_argument);
+  EXPECT_EQ(static_cast<double>(vars.time), 0.5);
+}
+
 TEST(Expression, SurvivesAMoveOfItsVariables) {
   // muparser holds the addresses of the variables: a moved block must carry them along.
   ExpressionVariables v;

@@ -101,11 +101,31 @@ ExpressionError::ExpressionError(const std::string& text, double time, const std
 Expression::Expression(const std::string& text, ExpressionVariables& vars, int time_derivatives)
     : impl_(std::make_unique<Impl>()), time_(nullptr), text_(text),
       n_derivatives_(std::max(time_derivatives, 0)) {
+  // muparser reads `=`, `+=`, `-=`, `*=`, `/=` as assignments to its variables: `t=0.001 ? 1 : 0`
+  // would set the time every other expression reads. A model's expressions compute a value,
+  // so an `=` that is not part of `==`, `<=`, `>=` or `!=` is refused before anything is
+  // evaluated; so is a list of several expressions (`1, 2`), of which only one value is used.
+  for (size_t i = 0; i < text.size(); ++i) {
+    if (text[i] != '=') continue;
+    const char before = i > 0 ? text[i - 1] : ' ', after = i + 1 < text.size() ? text[i + 1] : ' ';
+    if (after == '=') {
+      ++i;  // ==
+      continue;
+    }
+    if (before == '<' || before == '>' || before == '!') continue;
+    throw std::invalid_argument("'=' at character " + std::to_string(i + 1) +
+                                " would assign to a variable; an expression computes a value "
+                                "(compare with '==')");
+  }
   try {
     configure(impl_->parser, vars);
     time_ = vars.time.address();
     impl_->parser.SetExpr(text);
-    impl_->parser.Eval();  // compile now so errors surface at load time
+    int results = 0;
+    impl_->parser.Eval(results);  // compile now so errors surface at load time
+    if (results != 1)
+      throw std::invalid_argument("expected one expression, got a list of " +
+                                  std::to_string(results) + " separated by ','");
     for (const auto& [name, ptr] : impl_->parser.GetUsedVar())
       if (name != "time" && name != "t") uses_state_ = true;
     if (n_derivatives_ == 0) return;
