@@ -1157,6 +1157,31 @@ TEST(Cli, Hdf5SelectedChannelsAndAnInterruptedRun) {
   EXPECT_NEAR(cols.at("time").values.back(), j["status"]["time"].get<double>(), 1e-12);
   fs::remove_all(dir);
 }
+
+TEST(Cli, AnHdf5FileThatCannotGrowKeepsItsChunksAndCloses) {
+  // File-size limits (sh counts 512-byte blocks) that the first chunk (about 1.9 MB of 57
+  // channels) and the third pass: exit 3 with summary.json, and a file that opens with the
+  // chunks written before. A write HDF5 could not finish left a file it could not open, and
+  // its exit handler crashed (139).
+  for (const auto& [blocks, chunks] : std::vector<std::pair<int, long>>{{1000, 0}, {10000, 2}}) {
+    SCOPED_TRACE(blocks);
+    const fs::path dir = temp_dir("h5_limit");
+    const Result r = run_lash_raw("ulimit -f " + std::to_string(blocks) + "; " +
+                                  std::string(LASH_BINARY) + " run " + example() + " -q -o " +
+                                  dir.string() + " --format hdf5 --set solver.end_time=0.12");
+    EXPECT_EQ(r.code, 3) << r.out;
+    EXPECT_NE(r.out.find("File too large"), std::string::npos) << r.out;
+    const auto j = read_summary(dir);
+    EXPECT_EQ(j["status"]["outcome"], "write_error");
+    EXPECT_EQ(j["output"]["rows"].get<long>(), chunks * 4096);
+    std::vector<std::string> names = {"time", "slider.x", "rod_slider.Fn"};
+    const auto cols = read_h5(dir / "timeseries.h5", names);
+    ASSERT_EQ(cols.size(), names.size());
+    for (const auto& [n, c] : cols) EXPECT_EQ(static_cast<long>(c.values.size()), chunks * 4096) << n;
+    if (chunks > 0) EXPECT_NEAR(cols.at("time").values.back(), (chunks * 4096 - 1) * 1e-5, 1e-12);
+    fs::remove_all(dir);
+  }
+}
 #endif
 
 TEST(Cli, AnHdf5RunIsReadLikeACsvRun) {

@@ -1,6 +1,9 @@
 #include "io/hdf5_series.hpp"
 
 #include <fcntl.h>
+#include <sys/resource.h>
+#include <sys/stat.h>
+#include <sys/statvfs.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -22,6 +25,8 @@ bool hdf5_available() { return true; }
 struct Hdf5Series::Handles {
   hid_t file = -1;
   std::vector<hid_t> datasets;
+  off_t flushed_size = -1;  ///< the file's size after its last successful flush
+  bool failed = false;      ///< a write or flush failed: the file must not be flushed again
 };
 
 namespace {
@@ -41,6 +46,12 @@ bool write_string_attribute(hid_t object, const char* name, const std::string& v
   return ok;
 }
 
+/// The size of the file `path` (−1 if it cannot be read).
+off_t file_size(const std::string& path) {
+  struct stat st {};
+  return ::stat(path.c_str(), &st) == 0 ? st.st_size : -1;
+}
+
 std::string reason() {
   return errno != 0 ? std::string("HDF5 write failed: ") + std::strerror(errno)
                     : std::string("HDF5 write failed");
@@ -50,6 +61,9 @@ std::string reason() {
 
 Hdf5Series::Hdf5Series(const std::string& path, const std::vector<ChannelInfo>& channels)
     : path_(path), h_(std::make_unique<Handles>()) {
+  // The library's exit handler would flush files still open; every file is closed here, and
+  // one whose write failed must not be flushed (abandon).
+  H5dont_atexit();
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // errors are reported as IoError, not printed
   errno = 0;
   h_->file = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
@@ -82,9 +96,12 @@ Hdf5Series::Hdf5Series(const std::string& path, const std::vector<ChannelInfo>& 
   columns_.assign(cols.size(), {});
   for (auto& col : columns_) col.reserve(kChunkRows);
   if (H5Fflush(h_->file, H5F_SCOPE_LOCAL) < 0) {
+    h_->failed = true;
+    const std::string why = reason();
     abandon();
-    throw IoError(path, reason());
+    throw IoError(path, why);
   }
+  h_->flushed_size = file_size(path_);
 }
 
 Hdf5Series::~Hdf5Series() { abandon(); }
@@ -100,6 +117,21 @@ void Hdf5Series::append(double t, const double* values) {
 void Hdf5Series::write_buffered() {
   const hsize_t n = columns_[0].size();
   if (n == 0 || !is_open()) return;
+  // Room for the chunk first. A write HDF5 starts and cannot finish leaves a file it can no
+  // longer open (see abandon), so a chunk that would pass the file-size limit or fill the disk
+  // is not started: the file closes as its last flush left it. The need: the chunk's doubles,
+  // a twentieth more for the chunk index and headers, and 64 KiB.
+  const double need = 1.05 * 8.0 * static_cast<double>(n * columns_.size()) + 65536.0;
+  rlimit limit{};
+  if (::getrlimit(RLIMIT_FSIZE, &limit) == 0 && limit.rlim_cur != RLIM_INFINITY &&
+      static_cast<double>(h_->flushed_size) + need > static_cast<double>(limit.rlim_cur))
+    throw IoError(path_, std::string("HDF5 write not started: ") + std::strerror(EFBIG) +
+                             " (the next chunk would pass the file-size limit)");
+  struct statvfs fs {};
+  if (::statvfs(path_.c_str(), &fs) == 0 &&
+      static_cast<double>(fs.f_bavail) * static_cast<double>(fs.f_frsize) < need)
+    throw IoError(path_, std::string("HDF5 write not started: ") + std::strerror(ENOSPC) +
+                             " (no room for the next chunk)");
   errno = 0;
   const hsize_t start[1] = {static_cast<hsize_t>(rows_)}, count[1] = {n};
   const hsize_t extent[1] = {static_cast<hsize_t>(rows_) + n};
@@ -116,14 +148,23 @@ void Hdf5Series::write_buffered() {
   }
   H5Sclose(mem);
   ok = ok && H5Fflush(h_->file, H5F_SCOPE_LOCAL) >= 0;
-  if (!ok) throw IoError(path_, reason());
+  if (!ok) {
+    h_->failed = true;
+    throw IoError(path_, reason());
+  }
+  h_->flushed_size = file_size(path_);
   rows_ += static_cast<long long>(n);
   for (auto& col : columns_) col.clear();
 }
 
 void Hdf5Series::close() {
   if (!is_open()) return;
-  write_buffered();
+  try {
+    write_buffered();
+  } catch (const IoError&) {
+    abandon();  // the chunks flushed before stay, readable
+    throw;
+  }
   for (hid_t ds : h_->datasets) H5Dclose(ds);
   h_->datasets.clear();
   const herr_t rc = H5Fclose(h_->file);
@@ -138,10 +179,27 @@ void Hdf5Series::close() {
 
 void Hdf5Series::abandon() {
   if (!is_open()) return;
+  if (h_->failed) {
+    // HDF5 flushes a file's dirty metadata when it closes it. After a failed write (a full disk,
+    // a file-size limit) that flush fails too, or writes a superblock that counts space never
+    // written, and the file no longer opens; and a file left open crashed the library's exit
+    // handler. So the file's descriptor is pointed at /dev/null before closing (the close
+    // writes nothing), and the file is cut back to its size at its last successful flush:
+    // the chunks written before the failure, as consistent as that flush left them.
+    void* handle = nullptr;
+    if (H5Fget_vfd_handle(h_->file, H5P_DEFAULT, &handle) >= 0 && handle) {
+      const int null = ::open("/dev/null", O_RDWR | O_CLOEXEC);
+      if (null >= 0) {
+        ::dup2(null, *static_cast<int*>(handle));
+        ::close(null);
+      }
+    }
+  }
   for (hid_t ds : h_->datasets) H5Dclose(ds);
   h_->datasets.clear();
   H5Fclose(h_->file);
   h_->file = -1;
+  if (h_->failed && h_->flushed_size >= 0) (void)::truncate(path_.c_str(), h_->flushed_size);
 }
 
 struct Hdf5Rows::Handles {
