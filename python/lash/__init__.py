@@ -18,6 +18,7 @@ model is used, so every error reads as the CLI's, `file:line:column: ...`, raise
 """
 from __future__ import annotations
 
+import json
 import math
 import numbers
 import operator
@@ -49,9 +50,22 @@ def _yaml_value(value: Any) -> str:
         return repr(float(value)) if isinstance(value, (float, np.floating)) else str(int(value))
     if isinstance(value, str):
         return value
-    if isinstance(value, (list, tuple, dict)):
-        return _lash.emit_yaml(value).strip()
+    if isinstance(value, (list, tuple, dict, np.ndarray)):
+        return _flow_yaml(value)
     raise TypeError(f"cannot set a {type(value).__name__} as a model value")
+
+
+def _flow_yaml(value: Any) -> str:
+    """A list or map as one line of YAML flow style, as an override's value must be (a block-style
+    map spans lines, and the override reader took its text for a string). Strings inside are
+    quoted (JSON's quoting is YAML's)."""
+    if isinstance(value, dict):
+        return "{" + ", ".join(f"{json.dumps(str(k))}: {_flow_yaml(v)}" for k, v in value.items()) + "}"
+    if isinstance(value, (list, tuple, np.ndarray)):
+        return "[" + ", ".join(_flow_yaml(v) for v in value) + "]"
+    if isinstance(value, str):
+        return json.dumps(value)
+    return _yaml_value(value)
 
 
 def _override_list(overrides: str | Iterable[str]) -> List[str]:

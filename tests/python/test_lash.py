@@ -297,6 +297,11 @@ def test_messages_name_what_was_passed(tmp_path):
     # The caller's own override string keeps its name: an override, not the CLI's --set.
     with pytest.raises(lash.ModelError, match="^override solver.end_time: no 'solver'"):
         lash.simulate(lash.Model.new("x"), overrides="solver.end_time=1")
+    # A map or a list set in code reaches the model as one (a map was read as a string).
+    m = lash.load(FLORES).set("joints.rod_slider.friction", {"law": "coulomb", "mu": 0.1})
+    assert "law: coulomb" in m.resolved_yaml()
+    m.set("bodies.slider.position", np.array([0.2, 0.0]))
+    assert lash.simulate(m, t_end=1e-4).ok
     # So do the values Model.set and load's overrides change.
     bad = lash.load(FLORES).set("joints.rod_slider.clearance", -1)
     with pytest.raises(lash.ModelError) as err:
