@@ -558,6 +558,12 @@ TEST(SweepCli, AFailingRunIsRecordedAndTheRestComplete) {
   EXPECT_EQ(rows, (std::vector<std::string>{"0|completed", "1|error", "2|failed", "3|completed"}));
   const auto msg = query(dir / "out" / "study.db", "select message from runs where run = 1");
   EXPECT_NE(msg[0].find("clearance"), std::string::npos) << msg[0];
+  // Run 2 stopped inside its transient (the first period): no metrics from after it, contact
+  // metrics included (they were counted over the transient instead); the completed runs have them.
+  const auto contact = query(dir / "out" / "study.db",
+                             "select run, count(*) from metrics where name like 'rod_slider.%' "
+                             "group by run order by run");
+  EXPECT_EQ(contact, (std::vector<std::string>{"0|9", "3|9"}));
   // The study's report names the failed runs with their errors. It leaves no SQLite side files
   // (a read-only connection to the WAL database created study.db-wal and -shm and could not
   // remove them), and a folder given with a trailing slash is printed without a doubled one.

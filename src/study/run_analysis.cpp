@@ -943,7 +943,7 @@ RunAnalysis analyze_samples(const Model& model, const AnalysisOptions& o, Plan& 
     // Over the statistics window (a sweep's: after its transient; the whole run by default or
     // when the window misses the run); the mode at its start is the last event's before it.
     double w0 = std::max(p.t_start, o.stats_t0), w1 = std::min(t_end, o.stats_t1);
-    if (!(w0 < w1)) w0 = p.t_start, w1 = t_end;
+    if (!(w0 < w1)) w0 = p.t_start, w1 = t_end, ja.modes_in_window = false;
     bool in_at_w0 = je.in_contact_at_start;
     for (size_t k = 0; k < je.t.size() && je.t[k] < w0; ++k) in_at_w0 = je.onset[k];
     ja.modes = contact_modes(je.t, je.onset, je.v, in_at_w0, w0, w1, cont_time);

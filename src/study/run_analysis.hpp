@@ -119,6 +119,9 @@ struct ClearanceJointAnalysis {
   std::vector<Vec2> orbit;              ///< eccentricity e = r_J − r_B, every k-th output, m
   double continuous_contact_time = 0.0; ///< s: longer contact episodes are continuous contact
   ModeSummary modes;                    ///< episodes, shares, impacts and their velocities δ̇⁻
+  /// `modes` cover the statistics window (a sweep's: after its transient); false when the run
+  /// ended before the window began, and they cover the whole run instead.
+  bool modes_in_window = true;
   ImpactHistogram histogram;
 };
 

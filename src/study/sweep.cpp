@@ -902,6 +902,8 @@ RunRecord run_study_point(const StudySpec& spec, const StudyRun& run, const std:
           rec.metrics.push_back({name + ".rms", s.rms});
         }
     for (const auto& c : ra.clearance) {
+      // A run that ended in its transient has no contact metrics, as it has no peaks.
+      if (!c.modes_in_window) continue;
       double vmax = 0;
       for (double v : c.modes.impact_velocities) vmax = std::max(vmax, std::abs(v));
       rec.metrics.push_back({c.joint + ".impacts", static_cast<double>(c.modes.impacts)});
