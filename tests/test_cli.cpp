@@ -1020,9 +1020,21 @@ TEST(Cli, ChannelPatternMatchingNothingIsAnErrorNamingTheClosest) {
   // The same from the model file's solver settings (here through --set), named as such.
   r = run_lash("run " + example() + " -q -o " + dir.string() + " --set solver.output_channels=rod.*,nope*");
   EXPECT_EQ(r.code, 2) << r.out;
-  EXPECT_NE(r.out.find("solver.output_channels: channel pattern 'nope*' matches no channel"),
+  EXPECT_NE(r.out.find("solver: output_channels: channel pattern 'nope*' matches no channel"),
             std::string::npos)
       << r.out;
+  // lash check finds it too, at the entry's line and column (it said ok, and run refused).
+  fs::create_directories(dir.parent_path());
+  const fs::path oc = dir.parent_path() / "oc.yaml";
+  std::ofstream(oc) << "bodies: {b: {mass: 1, inertia: 1}}\nsolver:\n  end_time: 0.01\n"
+                       "  output_channels: [b.x, b.vxx]\n";
+  r = run_lash("check " + oc.string());
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find(oc.string() + ":4:26: solver: output_channels: channel pattern 'b.vxx' matches "
+                       "no channel"),
+            std::string::npos)
+      << r.out;
+  fs::remove(oc);
   r = run_lash("run " + example() + " -q -o " + dir.string() + " --set solver.output_format=xml");
   EXPECT_EQ(r.code, 2) << r.out;
   EXPECT_NE(r.out.find("unknown output_format 'xml', expected one of: csv, hdf5"), std::string::npos)

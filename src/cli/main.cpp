@@ -507,7 +507,8 @@ int main(int argc, char** argv) {
     }
   }
   // The time series' channels and format: the options replace the model's solver settings. A
-  // pattern that matches nothing is refused before the folder is touched.
+  // pattern of --channels that matches nothing is refused before the folder is touched (the
+  // model's own output_channels were checked by the loader, at their lines).
   lash::OutputSettings output = loaded.output;
   if (!channels_opt.empty()) output.channels = lash::split_channel_patterns(channels_opt);
   if (!format_opt.empty())
@@ -515,8 +516,8 @@ int main(int argc, char** argv) {
   try {
     lash::select_channels(lash::channel_info(model), output.channels);
   } catch (const std::invalid_argument& e) {
-    std::cerr << "error: " << (channels_opt.empty() ? "solver.output_channels" : "--channels")
-              << ": " << e.what() << "\nnothing was run; " << out_dir << "/ is unchanged\n";
+    std::cerr << "error: --channels: " << e.what() << "\nnothing was run; " << out_dir
+              << "/ is unchanged\n";
     return kExitBadInput;
   }
   if (output.format == lash::OutputFormat::hdf5 && !lash::hdf5_available()) {

@@ -209,6 +209,17 @@ class Loader {
       }
       throw ModelError(r_.list);
     }
+    // The channels the model's output_channels select, now that the channels are known: each
+    // pattern that matches none is reported at its entry (lash check finds what lash run would
+    // refuse).
+    for (const auto& [node, pattern] : output_patterns_) {
+      try {
+        select_channels(m.channels, {pattern});
+      } catch (const std::invalid_argument& e) {
+        r_.error(node, "solver", std::string("output_channels: ") + e.what());
+      }
+    }
+    if (!r_.list.empty()) throw ModelError(r_.list);
     return m;
   }
 
@@ -1010,13 +1021,17 @@ class Loader {
       std::vector<std::string> patterns;
       if (oc.IsScalar()) {
         patterns = split_channel_patterns(oc.Scalar());
+        for (const auto& p : patterns) output_patterns_.emplace_back(oc, p);
       } else if (oc.IsSequence()) {
         for (const auto& e : oc) {
           if (!e.IsScalar()) {
             r_.error(e, "solver", "output_channels: each entry must be a pattern such as 'slider.*'");
             continue;
           }
-          for (auto& p : split_channel_patterns(e.Scalar())) patterns.push_back(p);
+          for (auto& p : split_channel_patterns(e.Scalar())) {
+            output_patterns_.emplace_back(e, p);
+            patterns.push_back(p);
+          }
         }
       } else {
         r_.error(oc, "solver", "output_channels must be a list of patterns such as ['slider.*']");
@@ -1057,6 +1072,8 @@ class Loader {
 
   Reporter r_;
   OutputSettings output_;
+  /// Each pattern of solver.output_channels with the node of its entry (checked after finalize).
+  std::vector<std::pair<YAML::Node, std::string>> output_patterns_;
   YAML::Node defaults_;
   std::vector<std::string> body_names_;
   std::vector<std::vector<Marker>> markers_;
