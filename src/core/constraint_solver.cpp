@@ -43,9 +43,24 @@ std::string owner_name(const Model& model, const RowOwner& o) {
                   : "joint '" + model.joints[o.index].name + "'";
 }
 
-/// Rows kept in order (greedy, modified Gram–Schmidt with reorthogonalisation): row i is
-/// redundant when its component outside the span of the rows kept before it is at most
-/// kRedundancyTolerance of its norm.
+
+/// Whether `rows` (of phi_q) restricted to body block `bl` are independent, well conditioned.
+bool independent_on_block(const Eigen::MatrixXd& phi_q, const std::vector<int>& rows,
+                          const BodyBlock& bl) {
+  if (static_cast<int>(rows.size()) > bl.size) return false;
+  Eigen::MatrixXd a(rows.size(), bl.size);
+  for (size_t r = 0; r < rows.size(); ++r) {
+    a.row(r) = phi_q.row(rows[r]).segment(bl.offset, bl.size);
+    const double n = a.row(r).norm();
+    if (!(n > 0.0)) return false;
+    a.row(r) /= n;
+  }
+  const Eigen::VectorXd sv = Eigen::JacobiSVD<Eigen::MatrixXd>(a).singularValues();
+  return sv[sv.size() - 1] >= kAnchorConditioning;
+}
+
+}  // namespace
+
 std::vector<bool> independent_rows(const Eigen::MatrixXd& phi_q) {
   const int m = static_cast<int>(phi_q.rows());
   std::vector<bool> keep(m, false);
@@ -65,23 +80,6 @@ std::vector<bool> independent_rows(const Eigen::MatrixXd& phi_q) {
   return keep;
 }
 
-/// Whether `rows` (of phi_q) restricted to body block `bl` are independent, well conditioned.
-bool independent_on_block(const Eigen::MatrixXd& phi_q, const std::vector<int>& rows,
-                          const BodyBlock& bl) {
-  if (static_cast<int>(rows.size()) > bl.size) return false;
-  Eigen::MatrixXd a(rows.size(), bl.size);
-  for (size_t r = 0; r < rows.size(); ++r) {
-    a.row(r) = phi_q.row(rows[r]).segment(bl.offset, bl.size);
-    const double n = a.row(r).norm();
-    if (!(n > 0.0)) return false;
-    a.row(r) /= n;
-  }
-  const Eigen::VectorXd sv = Eigen::JacobiSVD<Eigen::MatrixXd>(a).singularValues();
-  return sv[sv.size() - 1] >= kAnchorConditioning;
-}
-
-}  // namespace
-
 /// The solver's rows, order and pattern; with `late`, every row is anchored to the last of its
 /// bodies in the order.
 static void build_solver(const Model& model, Workspace& ws, const Eigen::MatrixXd& phi_q,
@@ -91,7 +89,8 @@ static void build_solver(const Model& model, Workspace& ws, const Eigen::MatrixX
   const std::vector<RowOwner> owner = row_owners(model, ws);
 
   // Redundant rows: dropped, named in a warning (a driver's: refused).
-  const std::vector<bool> keep = independent_rows(phi_q);
+  const std::vector<bool> keep =
+      pattern.keep.empty() ? independent_rows(phi_q) : pattern.keep;
   for (int i = 0; i < m; ++i)
     if (keep[i]) s->active.push_back(i);
   ws.warnings.clear();

@@ -134,7 +134,14 @@ struct ConstraintSolver {
 /// those of them whose value is the same at every configuration.
 struct JacobianPattern {
   Eigen::Array<bool, Eigen::Dynamic, Eigen::Dynamic> nonzero, fixed;
+  /// Per row of Φ_q: kept (not redundant). Empty: independent_rows of the Φ_q given.
+  std::vector<bool> keep;
 };
+
+/// Rows kept in order (greedy, modified Gram–Schmidt with reorthogonalisation): row i is
+/// redundant when its component outside the span of the rows kept before it is at most
+/// kRedundancyTolerance of its norm.
+std::vector<bool> independent_rows(const Eigen::MatrixXd& phi_q);
 
 /// Sets up ws's constraint solver from Φ_q (ws.m × ws.nq) at an assembled configuration and
 /// the pattern of Φ_q (entries outside `nonzero` must stay 0 at every configuration and the

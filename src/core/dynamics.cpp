@@ -81,6 +81,50 @@ JacobianPattern jacobian_pattern(const Model& model, Workspace& ws, double t, co
     pattern.nonzero = pattern.nonzero || (pq.array() != 0.0);
     pattern.fixed = pattern.fixed && (pq.array() == phi_q.array());
   }
+  // Redundant rows. At a singular position (a parallelogram's links in line, a four-bar's
+  // change point) Φ_q loses rank at that configuration only: a row is dropped only if it is
+  // redundant at an assembled configuration nearby too, reached by a move of 1e-3 along the
+  // null space of the joints' rows (the mechanism's motions with the drivers let go, the
+  // singular direction among them: a driven mechanism reaches the nearby configuration a
+  // moment later) and Newton's method back onto the joints. A row kept that way is carried by
+  // the regularised factorisation through the singular instant (constraint_solver.hpp).
+  pattern.keep = independent_rows(phi_q);
+  if (std::find(pattern.keep.begin(), pattern.keep.end(), false) != pattern.keep.end()) {
+    auto joints_only = [&](Eigen::MatrixXd& a, Eigen::VectorXd* v) {
+      for (int r : ws.row_of_driver) {
+        a.row(r).setZero();
+        if (v) (*v)[r] = 0.0;
+      }
+    };
+    Eigen::MatrixXd joint_rows = phi_q;
+    joints_only(joint_rows, nullptr);
+    const Eigen::MatrixXd null = Eigen::FullPivLU<Eigen::MatrixXd>(joint_rows).kernel();
+    if (null.cols() > 0 && null.norm() > 0.0) {
+      Eigen::VectorXd r(null.cols());
+      for (int k = 0; k < r.size(); ++k) r[k] = unit(draw);
+      Eigen::VectorXd d = null * r;
+      if (d.norm() > 0.0) {
+        probe = Eigen::Map<const Eigen::VectorXd>(y, ws.ny);
+        probe.head(ws.nq) += 1e-3 * d / d.norm();
+        double residual = 1.0;
+        for (int it = 0; it < 50 && !(residual < 1e-12); ++it) {
+          update_kin(ws, probe.data());
+          build_constraints(model, ws, t, probe.data(), false, phi, pq, nullptr, nullptr);
+          Eigen::MatrixXd a = pq;
+          joints_only(a, &phi);
+          residual = phi.cwiseAbs().maxCoeff();
+          if (!(residual < 1e-12))
+            probe.head(ws.nq) -= Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd>(a).solve(phi);
+        }
+        if (residual < 1e-12) {
+          update_kin(ws, probe.data());
+          build_constraints(model, ws, t, probe.data(), false, phi, pq, nullptr, nullptr);
+          const std::vector<bool> near = independent_rows(pq);
+          for (int i = 0; i < ws.m; ++i) pattern.keep[i] = pattern.keep[i] || near[i];
+        }
+      }
+    }
+  }
   update_kin(ws, y);
   return pattern;
 }
