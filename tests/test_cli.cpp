@@ -541,6 +541,28 @@ TEST(Cli, AFailureWithoutClearanceJointsStillGivesTheState) {
   fs::remove_all(dir);
 }
 
+TEST(Cli, BdfFailsWhereTheRightHandSideBlowsUpInsteadOfCreeping) {
+  // A load that diverges at 1 ms, and a contact stiffness of 1e300: DOPRI5 stops at once with
+  // a step-size underflow; BDF crept on for its whole max_steps per output (9 million steps in
+  // two minutes before a time-out). It now stops at its smallest step, 16 ε·max(1, |t|).
+  const std::vector<std::string> cases = {
+      " --set solver.end_time=0.004 --set 'loads={f: {type: force, point: slider, fx: \"1/(0.001 - t)\"}}'",
+      " --set solver.end_time=0.002 --set joints.rod_slider.stiffness=1e300"};
+  for (const auto& extra : cases) {
+    SCOPED_TRACE(extra);
+    const fs::path dir = temp_dir("bdf_blowup");
+    const Result r = run_lash("run " + example() + " -q -o " + dir.string() +
+                              " --set solver.integrator=bdf" + extra);
+    EXPECT_EQ(r.code, 1) << r.out;
+    EXPECT_NE(r.out.find("integrator bdf failed"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("|h| = hmin"), std::string::npos) << r.out;
+    const auto j = read_summary(dir);
+    EXPECT_EQ(j["status"]["outcome"], "failed");
+    EXPECT_LT(j["integrator"]["steps"].get<long>(), 100000);
+    fs::remove_all(dir);
+  }
+}
+
 TEST(Cli, RunContinuesFromASavedStateTimeAndAll) {
   const fs::path dir = temp_dir("from");
   const fs::path a = dir / "a", b = dir / "b", bad = dir / "bad";
