@@ -508,10 +508,12 @@ TEST(Cli, ExpressionFailingMidRunExitsOneWithASummary) {
       SCOPED_TRACE(text + " with " + integrator);
       EXPECT_EQ(r.code, 1) << r.out;
       EXPECT_NE(r.out.find("simulation stopped at t = "), std::string::npos) << r.out;
-      EXPECT_NE(r.out.find("expression '" + text + "'"), std::string::npos) << r.out;
+      EXPECT_NE(r.out.find("load 'push': expression '" + text + "'"), std::string::npos) << r.out;
+      EXPECT_EQ(r.out.find("joint 'push'"), std::string::npos) << r.out;
       ASSERT_TRUE(fs::exists(out / "summary.json")) << r.out;
       const auto j = read_summary(out);
       EXPECT_EQ(j["status"]["outcome"], "failed");
+      EXPECT_EQ(j["status"]["element"], "push");  // it was empty
       EXPECT_FALSE(j["status"]["ok"].get<bool>());
       EXPECT_GE(j["status"]["time"].get<double>(), 1e-3);
       EXPECT_LT(j["status"]["time"].get<double>(), 0.05);
@@ -544,7 +546,7 @@ TEST(Cli, AFailureWithoutClearanceJointsStillGivesTheState) {
 TEST(Cli, BdfFailsWhereTheRightHandSideBlowsUpInsteadOfCreeping) {
   // A load that diverges at 1 ms, and a contact stiffness of 1e300: DOPRI5 stops at once with
   // a step-size underflow; BDF crept on for its whole max_steps per output (9 million steps in
-  // two minutes before a time-out). It now stops at its smallest step, 16 ε·max(1, |t|).
+  // two minutes before a time-out). It now stops at its smallest step, 16 ε·|t|.
   const std::vector<std::string> cases = {
       " --set solver.end_time=0.004 --set 'loads={f: {type: force, point: slider, fx: \"1/(0.001 - t)\"}}'",
       " --set solver.end_time=0.002 --set joints.rod_slider.stiffness=1e300"};

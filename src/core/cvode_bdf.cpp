@@ -100,12 +100,13 @@ class CvodeBdf final : public Integrator {
     }
     double t_ret = t_;
     last_error_.clear();
-    // The smallest step, as DOPRI5's underflow test: 16 ε·max(1, |t|). Below it a step no
-    // longer moves t by more than round-off, and CVODE would creep on for its whole max_steps
-    // per output (tens of millions of steps, minutes) where the right-hand side blows up (a
-    // load that diverges at an instant, a stiffness of 1e300); with it CVODE fails there.
-    CVodeSetMinStep(mem_, 16.0 * std::numeric_limits<double>::epsilon() *
-                              std::max(1.0, std::abs(t_out)));
+    // The smallest step: 16 ε·|t|. Below it a step no longer moves t by more than round-off,
+    // and CVODE would creep on for its whole max_steps per output (tens of millions of steps,
+    // minutes) where the right-hand side blows up (a load that diverges at an instant, a
+    // stiffness of 1e300); with it CVODE fails there. Not DOPRI5's 16 ε·max(1, |t|): CVODE's
+    // first steps after an event's restart go below that near t = 0, and clamping them changed
+    // the runs that use BDF.
+    CVodeSetMinStep(mem_, 16.0 * std::numeric_limits<double>::epsilon() * std::abs(t_));
     const int flag =
         hook_ || stop_ ? one_step_to(t_out, t_ret) : CVode(mem_, t_out, y_, &t_ret, CV_NORMAL);
     if (pending_) {  // the right-hand side threw (e.g. an ExpressionError): CVODE has stopped

@@ -64,6 +64,18 @@ std::string describe_contacts(const Model& model, const Workspace& ws) {
   return s.str();
 }
 
+/// The status of a run stopped by an expression failing mid-run: the load or driver it
+/// belongs to as the element, and named in the message.
+RunStatus expression_failure(const Model& model, const ExpressionError& e) {
+  for (const Load& l : model.loads)
+    if (l.fx == e.text() || l.fy == e.text() || l.torque == e.text())
+      return {false, e.time(), l.name, "load '" + l.name + "': " + e.what()};
+  for (const Driver& d : model.drivers)
+    if (d.expression == e.text())
+      return {false, e.time(), d.name, "driver '" + d.name + "': " + e.what()};
+  return {false, e.time(), "", e.what()};
+}
+
 /// A journal more than its own radius into the bearing wall went through it.
 bool journal_through_bearing(const Model& model, const Workspace& ws, RunStatus& st, double t) {
   for (int k = 0; k < ws.nc; ++k) {
@@ -300,7 +312,7 @@ bool Simulator::advance_to(double t_target, Observer* observer) try {
   }
   return true;
 } catch (const ExpressionError& e) {
-  status_ = {false, e.time(), "", e.what()};
+  status_ = expression_failure(model_, e);
   return false;
 }
 
@@ -485,7 +497,7 @@ RunResult simulate(const Model& model, Workspace& ws, Observer& observer,
     try {
       finite = evaluate(model, ws, t, y.data(), ydot.data());
     } catch (const ExpressionError& e) {  // an expression failing mid-run: a numerical failure
-      result.status = {false, e.time(), "", e.what()};
+      result.status = expression_failure(model, e);
       return false;
     }
     if (!finite)
