@@ -940,6 +940,13 @@ TEST(Cli, ARunRemovesOnlyWhatLashWrote) {
   EXPECT_EQ(run_lash("run " + example() + " -q -o " + dir.string() + " --set solver.end_time=0.002").code, 2);
   EXPECT_TRUE(fs::exists(dir / "summary.json"));
   EXPECT_TRUE(fs::exists(dir / "timeseries.csv"));
+  // lash report on that folder is refused before it writes anything (it wrote report.html and
+  // report_data.json, and then exited 2).
+  r = run_lash("report " + dir.string() + " --no-lyapunov");
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("a folder that lash did not write is in the way"), std::string::npos) << r.out;
+  EXPECT_FALSE(fs::exists(dir / "report.html"));
+  EXPECT_FALSE(fs::exists(dir / "report_data.json"));
   fs::remove_all(dir / "figures");
   // A run with its report: the figures are lash's and the next run replaces them.
   r = run_lash("run " + example() + " -q --report -o " + dir.string() + " --set solver.end_time=0.002");

@@ -311,6 +311,9 @@ std::vector<std::string> write_report(const json& data, const std::string& folde
   std::error_code ec;
   fs::create_directories(folder, ec);
   if (ec) throw IoError(folder, "cannot create the folder: " + ec.message());
+  // A figures/ that lash did not write stops the report before any file is written (it wrote
+  // report.html and report_data.json first, and then said nothing was done).
+  remove_earlier_output(folder + "/figures", kFiguresMarker, /*check_only=*/true);
   const std::string text = data.dump(-1, ' ', false, json::error_handler_t::replace);
   write_file_atomic(folder + "/report_data.json", text + "\n");
   notes.push_back("wrote " + folder + "/report_data.json");
