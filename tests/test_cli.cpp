@@ -1201,6 +1201,41 @@ TEST(Cli, Hdf5SelectedChannelsAndAnInterruptedRun) {
   fs::remove_all(dir);
 }
 
+/// Writes `value` at row `row` of the dataset `name` in `path` (a damaged file for the tests).
+void write_h5_value(const fs::path& path, const std::string& name, hsize_t row, double value) {
+  const hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+  ASSERT_GE(f, 0);
+  const hid_t ds = H5Dopen2(f, name.c_str(), H5P_DEFAULT);
+  const hid_t space = H5Dget_space(ds);
+  const hsize_t start[1] = {row}, count[1] = {1};
+  H5Sselect_hyperslab(space, H5S_SELECT_SET, start, nullptr, count, nullptr);
+  const hid_t mem = H5Screate_simple(1, count, nullptr);
+  EXPECT_GE(H5Dwrite(ds, H5T_NATIVE_DOUBLE, mem, space, H5P_DEFAULT, &value), 0);
+  H5Sclose(mem);
+  H5Sclose(space);
+  H5Dclose(ds);
+  H5Fclose(f);
+}
+
+TEST(Cli, AnHdf5TimeColumnIsCheckedAsTheCsvOne) {
+  // A time that is not finite, or that does not follow the row before, is a damaged folder
+  // (exit 2, naming the row), as in timeseries.csv; it was read as data.
+  const fs::path dir = temp_dir("h5_time");
+  ASSERT_EQ(run_lash("run " + example() + " -q -o " + dir.string() +
+                     " --format hdf5 --set solver.end_time=0.003").code, 0);
+  write_h5_value(dir / "timeseries.h5", "time", 5, std::nan(""));
+  Result r = run_lash("analyze " + dir.string() + " --no-lyapunov");
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("timeseries.h5: time of row 6 (nan) is not a finite number"), std::string::npos) << r.out;
+  write_h5_value(dir / "timeseries.h5", "time", 5, 5e-5);
+  write_h5_value(dir / "timeseries.h5", "time", 100, 0.5e-3);
+  r = run_lash("report " + dir.string() + " --no-lyapunov");
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("timeseries.h5: time of row 101 (0.00050000000000000001) does not follow"),
+            std::string::npos) << r.out;
+  fs::remove_all(dir);
+}
+
 TEST(Cli, AnHdf5FileThatCannotGrowKeepsItsChunksAndCloses) {
   // File-size limits (sh counts 512-byte blocks) that the first chunk (about 1.9 MB of 57
   // channels) and the third pass: exit 3 with summary.json, and a file that opens with the

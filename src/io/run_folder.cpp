@@ -291,7 +291,23 @@ RecordedRun read_run_folder(const std::string& dir, const Model& model) {
     } catch (const std::invalid_argument& e) {
       damaged(e.what());
     }
-    run.next_row = [h5](double& t, double* v) { return h5->next(t, v); };
+    // The time column checked as the CSV reader checks it: finite, each row after the last.
+    auto row = std::make_shared<long long>(0);
+    auto t_last = std::make_shared<double>(-std::numeric_limits<double>::infinity());
+    const std::string where = run.series_file;
+    run.next_row = [h5, row, t_last, where](double& t, double* v) {
+      if (!h5->next(t, v)) return false;
+      ++*row;
+      char at[64];
+      std::snprintf(at, sizeof at, "%.17g", t);
+      if (!std::isfinite(t))
+        damaged(where + ": time of row " + std::to_string(*row) + " (" + at + ") is not a finite number");
+      if (!(t > *t_last))
+        damaged(where + ": time of row " + std::to_string(*row) + " (" + at +
+                ") does not follow the row before");
+      *t_last = t;
+      return true;
+    };
     run.read.push_back("time series: " + file + " (" + std::to_string(rows) + " rows, " +
                        std::to_string(run.columns.size()) + " channels)");
     return run;
