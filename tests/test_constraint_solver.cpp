@@ -209,6 +209,7 @@ TEST(Redundancy, RedundantJointEquationsAreDroppedAndNamed) {
   EXPECT_EQ(w.rfind("joint 'coupler_2': 1 of its 2 equations is redundant with ", 0), 0u) << w;
   EXPECT_NE(w.find("joint 'pivot_0'"), std::string::npos) << w;
   EXPECT_NE(w.find("joint 'coupler_1'"), std::string::npos) << w;
+  EXPECT_EQ(w.find("joint 'coupler_2'", 10), std::string::npos) << "names itself: " << w;
 }
 
 TEST(Redundancy, RedundantDoubleParallelogramMovesAsTheNonRedundantOne) {

@@ -119,6 +119,8 @@ static void build_solver(const Model& model, Workspace& ws, const Eigen::MatrixX
         RowOwner last{true, -1};
         int count = 0;
         for (int r = 0; r < m; ++r) {
+          // Not the element itself: its kept equations take part, but it is named already.
+          if (r >= i && r < end) continue;
           if (!with[r] || (owner[r].driver == last.driver && owner[r].index == last.index)) continue;
           last = owner[r];
           names += (count++ ? ", " : "") + owner_name(model, owner[r]);
