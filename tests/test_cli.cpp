@@ -224,6 +224,7 @@ TEST(Cli, NumericalFailureKeepsResultsAndExitsOne) {
   EXPECT_NE(r.out.find("simulation stopped at t = "), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("joint 'rod_slider'"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("through its bearing"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("joint 'rod_slider'"), r.out.rfind("joint 'rod_slider'")) << "named once: " << r.out;
   EXPECT_GT(line_count(dir / "timeseries.csv"), 2u);
   const auto j = nlohmann::json::parse(std::ifstream(dir / "summary.json"));
   EXPECT_FALSE(j["status"]["ok"].get<bool>());

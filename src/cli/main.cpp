@@ -622,14 +622,9 @@ int main(int argc, char** argv) {
       break;
     case lash::RunOutcome::failed:
       print_notes(std::cerr);
-      // The element, unless the message opens with it ("load 'push': expression ...").
-      std::cerr << "\nerror: simulation stopped at t = " << status.t << " s"
-                << (status.element.empty() ||
-                            status.message.find("'" + status.element + "':") != std::string::npos
-                        ? ""
-                        : ", joint '" + status.element + "'")
-                << ": " << status.message << "\nresults up to that time are in " << out_dir
-                << "/\n";
+      // A message with an element opens with it ("joint 'rod_slider': ...", "load 'push': ...").
+      std::cerr << "\nerror: simulation stopped at t = " << status.t << " s: " << status.message
+                << "\nresults up to that time are in " << out_dir << "/\n";
       break;
   }
   return code;

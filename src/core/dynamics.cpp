@@ -116,9 +116,7 @@ JacobianPattern jacobian_pattern(const Model& model, Workspace& ws, double t, co
           if (!(residual < 1e-12))
             probe.head(ws.nq) -= Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd>(a).solve(phi);
         }
-        if (residual < 1e-12) {
-          update_kin(ws, probe.data());
-          build_constraints(model, ws, t, probe.data(), false, phi, pq, nullptr, nullptr);
+        if (residual < 1e-12) {  // pq is Φ_q at the converged probe (no step after the test)
           const std::vector<bool> near = independent_rows(pq);
           for (int i = 0; i < ws.m; ++i) pattern.keep[i] = pattern.keep[i] || near[i];
         }

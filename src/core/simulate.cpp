@@ -83,7 +83,7 @@ bool journal_through_bearing(const Model& model, const Workspace& ws, RunStatus&
     const auto& o = ws.clearance_out[k];
     if (o.delta > j.clearance->journal_radius) {
       std::ostringstream s;
-      s << "journal driven through its bearing: penetration " << o.delta
+      s << "joint '" << j.name << "': journal driven through its bearing: penetration " << o.delta
         << " m exceeds the journal radius " << j.clearance->journal_radius
         << " m (delta_dot = " << o.delta_dot << " m/s, Fn = " << o.f_n
         << " N); the contact is too soft for the load or the step too large";
@@ -296,7 +296,7 @@ bool Simulator::advance_to(double t_target, Observer* observer) try {
                       "masses and clearance, or a contact grazing at round-off)",
                       burst_events_, kEventBurstSpan * std::max(1.0, std::abs(adv.t)), burst_t_);
         status_ = {false, adv.t, j.name,
-                   std::string(msg) + "; state: " + describe_contacts(model_, ws_)};
+                   "joint '" + j.name + "': " + msg + "; state: " + describe_contacts(model_, ws_)};
         return false;
       }
     } else {
