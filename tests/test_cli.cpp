@@ -786,10 +786,15 @@ TEST(Cli, AnalysisOptionsAreRangeChecked) {
       {"analyze --window 5,1", "--window 5,1: T0 must be less than T1"},
       {"report --window nan,1", "--window nan,1: both times must be finite numbers"},
       {"analyze --discard -1", "--discard -1: expected a whole number of periods"},
-      {"analyze --lyapunov-d0 nan", "--lyapunov-d0 nan: expected a separation > 0 m"},
+      {"analyze --lyapunov-d0 nan", "--lyapunov-d0 nan: expected a separation in [1e-12, 1e-3] m"},
+      // Below the positions' round-off (gave an exponent of nonsense).
+      {"analyze --lyapunov-d0 1e-300", "--lyapunov-d0 1e-300: expected a separation in"},
       {"analyze --lyapunov-method qr", "--lyapunov-method qr: expected variational or two-trajectory"},
       {"analyze --plane slider.x=nan", "value 'nan' is not a finite number"},
-      {"report --angle-range 0,inf", "--angle-range 0,inf: both angles must be finite"},
+      {"report --angle-range 0,inf", "--angle-range 0,inf: both angles must be numbers in [0, 360]"},
+      // The crank angle is in [0, 360): -30,30 selected 0..30 only; ±1e300 broke the figures.
+      {"report --angle-range -30,30", "--angle-range -30,30: both angles must be numbers in [0, 360]"},
+      {"report --angle-range -1e300,1e300", "--angle-range -1e+300,1e+300: both angles"},
       // Sections and renormalisations without bound (1e-9 ran out of memory).
       {"analyze --period 1e-9", "--period 1e-09: shorter than the run's output interval (1e-05 s)"}};
   for (const auto& [args, message] : cases) {

@@ -626,9 +626,12 @@ void check_options(const AnalysisOptions& o) {
     if (o.stats_t1 <= o.stats_t0) bad(w, "T0 must be less than T1");
   }
   if (!std::isnan(o.stats_angle0) || !std::isnan(o.stats_angle1)) {
-    if (!std::isfinite(o.stats_angle0) || !std::isfinite(o.stats_angle1))
+    // The crank angle is taken in [0°, 360°): a bound outside [0, 360] selected part of the
+    // range silently (−30,30 meant 0,30) or broke the figures' folding (±1e300).
+    if (!(o.stats_angle0 >= 0 && o.stats_angle0 <= 360 && o.stats_angle1 >= 0 && o.stats_angle1 <= 360))
       bad("--angle-range " + fmt_g(o.stats_angle0) + "," + fmt_g(o.stats_angle1),
-          "both angles must be finite numbers (degrees)");
+          "both angles must be numbers in [0, 360] degrees (a range across 0 is written as "
+          "300,60)");
   }
   if (!std::isfinite(o.period) || o.period < 0)
     bad("--period " + fmt_g(o.period), "expected a positive period in seconds");
@@ -636,10 +639,13 @@ void check_options(const AnalysisOptions& o) {
     bad("--discard " + std::to_string(o.discard_periods), "expected a whole number of periods in [0, 1e6]");
   if (o.lyapunov_method != "variational" && o.lyapunov_method != "two-trajectory")
     bad("--lyapunov-method " + o.lyapunov_method, "expected variational or two-trajectory");
-  if (!std::isfinite(o.lyapunov_d0) || o.lyapunov_d0 < 0 || o.lyapunov_d0 > 1e-3)
+  // 0 is the default's sentinel; below 1e-12 m the separation is lost in the positions'
+  // round-off (1e-16 of a metre-sized mechanism) and the integration error.
+  if (!std::isfinite(o.lyapunov_d0) || (o.lyapunov_d0 != 0 && o.lyapunov_d0 < 1e-12) ||
+      o.lyapunov_d0 < 0 || o.lyapunov_d0 > 1e-3)
     bad("--lyapunov-d0 " + fmt_g(o.lyapunov_d0),
-        "expected a separation > 0 m and at most 1e-3 m, far below the clearance (or 0 for the "
-        "default)");
+        "expected a separation in [1e-12, 1e-3] m, far below the clearance and far above the "
+        "integration error (or 0 for the default)");
 }
 
 namespace {
