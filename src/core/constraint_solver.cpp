@@ -407,6 +407,13 @@ bool FixedPatternLdlt::factorize(const SparseMatrix& upper, const std::vector<si
       return true;
     }
     const int i = -1 - t;
+    if (sign[i] < 0 && !near_.empty() && v > -near_[i]) {  // NaN passes to the sign test
+      near_singular_ = true;
+      if (v > -floor_[i]) {
+        v = -floor_[i];
+        ++clamped_;
+      }
+    }
     d_[i] = v;
     if (!(sign[i] * v > 0.0)) return false;
     d_inverse[i] = 1.0 / v;
@@ -439,22 +446,45 @@ void prepare_constraint_solver(const Model& model, Workspace& ws, const Eigen::M
   // Safety net: a row pivot near 0 at assembly means an anchoring to an earlier body left a
   // leading block nearly singular; then every row goes after all of its bodies (safe whenever
   // the rows are independent, at the price of more fill).
-  ConstraintSolver& s = *ws.solver;
-  const int nq = ws.nq, ma = static_cast<int>(s.active.size());
+  const int nq = ws.nq, ma = static_cast<int>(ws.solver->active.size());
   if (ma == 0) return;
-  double* v = s.k.valuePtr();
-  for (int a = 0; a < ma; ++a) {
-    for (int e = s.phi_begin[a]; e < s.phi_begin[a + 1]; ++e)
-      v[s.phi_slot[e]] = phi_q(s.active[a], s.phi_col[e]);
-    v[s.slot_reg[a]] = -s.regularisation[a];
-  }
-  bool ok = s.ldlt.factorize(s.k, s.sign);
-  for (int a = 0; a < ma && ok; ++a) ok = -s.ldlt.diagonal()[s.pos[nq + a]] > 1e-10 * s.w_diag[a];
+  auto factor_at_assembly = [&] {
+    ConstraintSolver& s = *ws.solver;
+    double* v = s.k.valuePtr();
+    for (int a = 0; a < ma; ++a) {
+      for (int e = s.phi_begin[a]; e < s.phi_begin[a + 1]; ++e)
+        v[s.phi_slot[e]] = phi_q(s.active[a], s.phi_col[e]);
+      v[s.slot_reg[a]] = -s.regularisation[a];
+    }
+    return s.ldlt.factorize(s.k, s.sign);
+  };
+  bool ok = factor_at_assembly();
+  for (int a = 0; a < ma && ok; ++a)
+    ok = -ws.solver->ldlt.diagonal()[ws.solver->pos[nq + a]] > 1e-10 * ws.solver->w_diag[a];
   if (!ok) {
     const std::vector<std::string> warnings = ws.warnings;
     build_solver(model, ws, phi_q, pattern, true);
     ws.warnings = warnings;
+    factor_at_assembly();
   }
+  // The floors (kPivotFloor, kNearSingular), once the order is settled, relative to what the
+  // row's pivot measures: for a row after all of its coordinates, W_aa (the pivot is then the
+  // part of the row outside the span of the rows before it); for one anchored before some of
+  // them, its pivot at assembly (a part of W_aa only, which may be small far from any
+  // singular position: 3e-8 W_aa for the 4.5 g pivot of erkaya_compliant_beam.yaml).
+  ConstraintSolver& s = *ws.solver;
+  s.pivot_reference.clear();
+  std::vector<double> floor(nq + ma, 0.0), near(nq + ma, 0.0);
+  for (int a = 0; a < ma; ++a) {
+    const int p = s.pos[nq + a];
+    bool partial = false;
+    for (int e = s.phi_begin[a]; e < s.phi_begin[a + 1]; ++e) partial |= s.pos[s.phi_col[e]] > p;
+    const double reference = partial ? -s.ldlt.diagonal()[p] : s.w_diag[a];
+    s.pivot_reference.push_back(reference);
+    floor[p] = kPivotFloor * reference;
+    near[p] = kNearSingular * reference;
+  }
+  s.ldlt.set_row_floors(std::move(floor), std::move(near));
 }
 
 bool solve_constraints(Workspace& ws) {
@@ -464,18 +494,8 @@ bool solve_constraints(Workspace& ws) {
   for (const ConstraintSolver::Entry& e : s.phi_varying) v[e.slot] = ws.phi_q(e.row, e.col);
   for (int a = 0; a < ma; ++a) s.x[s.pos[nq + a]] = ws.rhs_m[s.active[a]];
   for (int k = 0; k < nq; ++k) s.x[s.pos[k]] = ws.g[k];
-  // Factor; a pivot of the wrong sign (the quasi-definite inertia lost to round-off: W singular
-  // to working precision) repeats it with a larger ε.
-  double factor = 1.0;
-  bool ok = false;
-  for (int attempt = 0; attempt <= kRegularisationSteps && !ok; ++attempt) {
-    if (attempt > 0) {
-      factor *= kRegularisationGrowth;
-      ++s.regularised;
-    }
-    for (int a = 0; a < ma; ++a) v[s.slot_reg[a]] = -factor * s.regularisation[a];
-    ok = s.ldlt.factorize(s.k, s.sign);
-  }
+  for (int a = 0; a < ma; ++a) v[s.slot_reg[a]] = -s.regularisation[a];
+  const bool ok = s.ldlt.factorize(s.k, s.sign);
   if (!ok) return false;
   s.ldlt.solve(s.x);
   for (int k = 0; k < nq; ++k) ws.qdd[k] = s.x[s.pos[k]];

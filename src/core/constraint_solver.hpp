@@ -45,10 +45,20 @@ inline constexpr double kRedundancyTolerance = 1e-8;
 /// the heavy bodies' reactions. Below 1e-9 for any Ŵ whose condition number is below 1e5.
 inline constexpr double kRegularisation = 1e-14;
 
-/// A factorisation that breaks down (a pivot of the wrong sign: W singular to working
-/// precision) is repeated with ε multiplied by this factor, at most kRegularisationSteps times.
-inline constexpr double kRegularisationGrowth = 1e3;
-inline constexpr int kRegularisationSteps = 3;
+/// Near a singular position (Φ_q losing rank: a parallelogram in line, a toggle) the pivot of
+/// the row that becomes dependent goes to −εD. A row pivot d_a with |d_a| < kPivotFloor·W_aa is
+/// set to −kPivotFloor·W_aa (a modified LDLᵀ): that row's equation is softened for the instant,
+/// with a compliance of 1/(kPivotFloor·W_aa), so that λ stays bounded and the factorisation never
+/// breaks down; its sign can no longer be lost to round-off. No example comes within a factor
+/// 1e3 of it (tests/test_constraint_solver.cpp), so it changes nothing away from singular
+/// positions.
+inline constexpr double kPivotFloor = 1e-8;
+
+/// A row pivot with |d_a| < kNearSingular·W_aa (about 1e-3 rad from a parallelogram's in-line
+/// position) marks the configuration as near-singular: the simulation then projects the state
+/// back onto the constraints after each step (project_onto_constraints in core/dynamics.hpp),
+/// which Baumgarte's terms alone cannot be trusted to do there.
+inline constexpr double kNearSingular = 1e-6;
 
 /// L D Lᵀ of a sparse symmetric matrix given by its upper triangle in elimination order, for
 /// many matrices of one pattern. The symbolic analysis is Eigen's SimplicialLDLT::analyzePattern
@@ -81,7 +91,17 @@ class FixedPatternLdlt {
   /// Factors `upper` (the analysed pattern). Stops and returns false at the first pivot d_k
   /// whose sign is not sign[k] (+1 or −1), before dividing by it. After one successful call,
   /// the part of the factorisation that depends only on fixed values is not computed again.
+  /// With floors set (set_row_floors), a pivot of sign −1 above −near[k] raises near_singular(),
+  /// and one above −floor[k] is set to −floor[k] (counted in clamped()).
   bool factorize(const SparseMatrix& upper, const std::vector<signed char>& sign);
+  /// Per pivot: its floor and its near-singular threshold (0 for the pivots of sign +1).
+  void set_row_floors(std::vector<double> floor, std::vector<double> near) {
+    floor_ = std::move(floor);
+    near_ = std::move(near);
+  }
+  long clamped() const { return clamped_; }  ///< pivots set to their floor, in all factorisations
+  bool near_singular() const { return near_singular_; }  ///< since the last clear
+  void clear_near_singular() { near_singular_ = false; }
   /// x ← A⁻¹x, in elimination order.
   void solve(Eigen::VectorXd& x) const;
   const Eigen::VectorXd& diagonal() const { return d_; }  ///< D of L D Lᵀ
@@ -103,6 +123,9 @@ class FixedPatternLdlt {
   std::vector<int> varying_;
   bool factored_ = false;  ///< a factorisation succeeded: the fixed entries hold their values
   Eigen::VectorXd d_, d_inverse_;  ///< D and its inverse
+  std::vector<double> floor_, near_;
+  long clamped_ = 0;
+  bool near_singular_ = false;
 };
 
 /// The sparse solver of one workspace: pattern, elimination order and factorisation.
@@ -125,9 +148,11 @@ struct ConstraintSolver {
   std::vector<double> w_diag;   ///< per active row: W_aa at assembly (M⁻¹ by its diagonal)
   /// Per active row: its base regularisation ε_a = kRegularisation · W_aa.
   std::vector<double> regularisation;
+  /// Per active row: what its pivot's floor and near-singular threshold are relative to
+  /// (W_aa, or its pivot at assembly for a row eliminated before some of its coordinates).
+  std::vector<double> pivot_reference;
   FixedPatternLdlt ldlt;
   Eigen::VectorXd x;            ///< right-hand side, then solution, in elimination order
-  long regularised = 0;         ///< solves that needed more than the base regularisation
 };
 
 /// Φ_q's pattern (ws.m × ws.nq): `nonzero` is true at the entries a row may write, `fixed` at
@@ -153,8 +178,8 @@ void prepare_constraint_solver(const Model& model, Workspace& ws, const Eigen::M
                                const JacobianPattern& pattern);
 
 /// Solves the augmented system at the current ws.phi_q, ws.g (applied forces) and ws.rhs_m
-/// (γ_B): fills ws.qdd and ws.lambda (0 on dropped rows). Returns false if no regularisation up
-/// to kRegularisation·kRegularisationGrowth^kRegularisationSteps gives a factorisation.
+/// (γ_B): fills ws.qdd and ws.lambda (0 on dropped rows). Returns false if a value is not
+/// finite (a row pivot near 0 is floored, kPivotFloor; a coordinate pivot cannot vanish).
 bool solve_constraints(Workspace& ws);
 
 }  // namespace lash

@@ -72,6 +72,7 @@ class CvodeBdf final : public Integrator {
       a_ = check_ptr(SUNDenseMatrix(p_.n, p_.n, ctx_), "SUNDenseMatrix");
       ls_ = check_ptr(SUNLinSol_Dense(y_, a_, ctx_), "SUNLinSol_Dense");
       check(CVodeSetLinearSolver(mem_, ls_, a_), "CVodeSetLinearSolver");
+      if (p_.project) projected_.resize(p_.n);
       if (p_.n_events > 0) {
         check(CVodeRootInit(mem_, p_.n_events, root_cb), "CVodeRootInit");
         std::vector<int> dir(p_.n_events, 1);  // events are g rising through zero
@@ -81,6 +82,8 @@ class CvodeBdf final : public Integrator {
     } else {
       accumulated_ = current();  // CVodeReInit zeroes CVODE's counters
       check(CVodeReInit(mem_, t, y_), "CVodeReInit");
+      if (restarted_) CVodeSetInitStep(mem_, 0.0);  // CVODE's own estimate again
+      restarted_ = false;
     }
     t_ = t;
     t_step_ = t;
@@ -108,7 +111,8 @@ class CvodeBdf final : public Integrator {
     // the runs that use BDF.
     CVodeSetMinStep(mem_, 16.0 * std::numeric_limits<double>::epsilon() * std::abs(t_));
     const int flag =
-        hook_ || stop_ ? one_step_to(t_out, t_ret) : CVode(mem_, t_out, y_, &t_ret, CV_NORMAL);
+        hook_ || stop_ || p_.project ? one_step_to(t_out, t_ret)
+                                     : CVode(mem_, t_out, y_, &t_ret, CV_NORMAL);
     if (pending_) {  // the right-hand side threw (e.g. an ExpressionError): CVODE has stopped
       std::exception_ptr e = pending_;
       pending_ = nullptr;
@@ -213,6 +217,22 @@ class CvodeBdf final : public Integrator {
       }
       t_step_ = t1;
       if (hook_) hook_(t0, t1);
+      if (p_.project && t1 < t_out) {
+        // A state moved onto the constraints (near a singular position) restarts CVODE there:
+        // its history would carry the jump into the next steps' predictor and error test. Not
+        // at a step that passed t_out: the output is interpolated in it, which a restart forgets.
+        Eigen::VectorXd& p = projected_;
+        for (int i = 0; i < p_.n; ++i) p[i] = NV_Ith_S(y_, i);
+        if (p_.project(t1, p)) {
+          for (int i = 0; i < p_.n; ++i) NV_Ith_S(y_, i) = p[i];
+          accumulated_ = current();
+          double h = 0.0;  // go on with the step size reached, not CVODE's first-step estimate
+          CVodeGetLastStep(mem_, &h);
+          check(CVodeReInit(mem_, t1, y_), "CVodeReInit");
+          CVodeSetInitStep(mem_, h);
+          restarted_ = true;
+        }
+      }
     }
   }
 
@@ -279,6 +299,8 @@ class CvodeBdf final : public Integrator {
   IntegratorStats accumulated_;
   std::string last_error_;
   std::exception_ptr pending_;  ///< thrown by the right-hand side during CVode()
+  Eigen::VectorXd projected_;   ///< the step's end handed to p_.project
+  bool restarted_ = false;      ///< a projection set CVODE's first step (reset() clears it)
   long rhs_failures_ = 0;       ///< failed right-hand sides since one succeeded past failed_at_
   double failed_at_ = 0.0;      ///< time of the last failed right-hand side
 };

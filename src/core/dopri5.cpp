@@ -169,6 +169,11 @@ class Dopri5 final : public Integrator {
       h_ = h * std::clamp(fac, 0.2, rejected_last ? 1.0 : 10.0);
       locate_events();
       if (hook_) hook_(t_old_, t_);  // the step, cut at a located event
+      if (!pending_event_ && p_.project && p_.project(t_, y_)) {
+        need_k1_ = true;  // the next step starts from the moved state
+        end_evaluated_ = false;
+        if (p_.n_events > 0) p_.events(t_, y_.data(), g_old_.data());
+      }
       return "";
     }
   }

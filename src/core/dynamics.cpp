@@ -489,6 +489,40 @@ double constraint_residual(const Model& model, Workspace& ws, double t, const do
   return ws.phi.cwiseAbs().maxCoeff();
 }
 
+bool project_onto_constraints(const Model& model, Workspace& ws, double t, Eigen::VectorXd& y) {
+  if (ws.m == 0 || !ws.solver || !ws.solver->ldlt.near_singular()) return false;
+  const int nq = ws.nq;
+  Eigen::VectorXd y0 = y, ydot(ws.ny);
+  if (!evaluate(model, ws, t, y.data(), ydot.data())) return false;
+  const double energy0 = ws.kinetic + ws.potential;
+  // Each correction solves [M Φ_qᵀ; Φ_q −εD] [Δ; −μ] = [0; −r]: Δ = M⁻¹Φ_qᵀμ with Φ_q Δ = −r.
+  auto correct = [&](const Eigen::VectorXd& r, int offset) {
+    ws.g.setZero();
+    ws.rhs_m = -r;
+    if (!solve_constraints(ws)) return false;
+    y.segment(offset, nq) += ws.qdd;
+    return true;
+  };
+  for (int it = 0; it < 4; ++it) {
+    update_kin(ws, y.data());
+    build_constraints(model, ws, t, y.data(), false, ws.phi, ws.phi_q, nullptr, nullptr);
+    if (!(ws.phi.cwiseAbs().maxCoeff() > 1e-15)) break;
+    if (!correct(ws.phi, 0)) return y = y0, false;
+  }
+  update_kin(ws, y.data());
+  build_constraints(model, ws, t, y.data(), false, ws.phi, ws.phi_q, &ws.phi_dot, nullptr);
+  if (!correct(ws.phi_dot, nq)) return y = y0, false;
+  if (!evaluate(model, ws, t, y.data(), ydot.data()) || !y.allFinite()) {
+    y = y0;
+    evaluate(model, ws, t, y.data(), ydot.data());
+    return false;
+  }
+  // energy.balance = kinetic + potential + dissipated − input − stabilization stays as it was.
+  y[ws.i_stabilization] += ws.kinetic + ws.potential - energy0;
+  ws.solver->ldlt.clear_near_singular();
+  return true;
+}
+
 void project_state(const Model& model, Workspace& ws, double t, Eigen::VectorXd& y) {
   if (ws.m == 0) return;
   const int nq = ws.nq;

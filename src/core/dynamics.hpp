@@ -171,6 +171,15 @@ inline constexpr double kStateToleranceVelocity = 1e-4;
 std::string constraint_problem(const Model& model, Workspace& ws, double t,
                                const Eigen::VectorXd& y, bool check_residual);
 
+/// Near a singular position (the constraint solver's flag, kNearSingular in
+/// core/constraint_solver.hpp): moves y onto the constraints, positions by Newton's method and
+/// then velocities, each correction the mass-weighted least-squares one (Δq = M⁻¹Φ_qᵀμ, the
+/// augmented system with no applied force), and books the change of kinetic plus potential
+/// energy as stabilization work, so energy.balance is unchanged. Clears the flag. Returns false
+/// (y untouched) away from singular positions, with no constraints, or if the state cannot be
+/// evaluated. Leaves the workspace as evaluated at the returned state.
+bool project_onto_constraints(const Model& model, Workspace& ws, double t, Eigen::VectorXd& y);
+
 /// Moves y (positions, then velocities) to the nearest state, in the least-squares sense, that
 /// satisfies the model's constraints at time t (clearance joints stay free). Used to perturb a
 /// state consistently (Lyapunov exponents). Throws std::runtime_error if it does not converge.

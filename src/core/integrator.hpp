@@ -17,6 +17,9 @@ struct OdeProblem {
   /// Returns false if f cannot be evaluated (NaN, singular constraints).
   std::function<bool(double t, const double* y, double* ydot)> rhs;
   std::function<void(double t, const double* y, double* g)> events;
+  /// Optional, called at the end of every accepted step not cut at an event: may move y (for
+  /// the constraints of a state near a singular position); returns true if it did.
+  std::function<bool(double t, Eigen::VectorXd& y)> project;
 };
 
 struct IntegratorOptions {
@@ -33,6 +36,8 @@ struct IntegratorStats {
   long rhs_evaluations = 0;
   long events = 0;
   double last_step = 0.0;
+  /// States moved onto the constraints near a singular position (OdeProblem::project).
+  long projections = 0;
 };
 
 /// Outcome of Integrator::advance.

@@ -1,3 +1,4 @@
+#include <cstdlib>
 #include "core/simulate.hpp"
 
 #include <cstdio>
@@ -141,6 +142,12 @@ void Simulator::hook_steps(Observer* observer) {
   });
 }
 
+void Simulator::problem_events(const double* y, double* g) const {
+  event_functions(model_, ws_, y, g);
+  for (size_t p = 0; p < planes_.size(); ++p)
+    g[ws_.nc + p] = planes_[p].direction * (y[planes_[p].index] - planes_[p].value);
+}
+
 Simulator::Simulator(const Model& model, Workspace& ws, std::vector<SectionPlane> planes)
     : model_(model), ws_(ws), planes_(std::move(planes)) {
   const SolverSettings& s = model.solver;
@@ -150,10 +157,38 @@ Simulator::Simulator(const Model& model, Workspace& ws, std::vector<SectionPlane
   problem.rhs = [this](double t, const double* yy, double* dy) {
     return evaluate(model_, ws_, t, yy, dy);
   };
-  problem.events = [this](double, const double* yy, double* g) {
-    event_functions(model_, ws_, yy, g);
-    for (size_t p = 0; p < planes_.size(); ++p)
-      g[ws_.nc + p] = planes_[p].direction * (yy[planes_[p].index] - planes_[p].value);
+  problem.events = [this](double, const double* yy, double* g) { problem_events(yy, g); };
+  // Near a singular position (core/constraint_solver.hpp, kNearSingular): back onto the
+  // constraints after each DOPRI5 step, and once on entering the near-singular window under
+  // BDF, whose every projection restarts CVODE at first order (projecting each step there took
+  // 10⁵ steps per passage); unless that would move an event function across zero (a contact
+  // onset or separation, or a section plane, that no step located).
+  const bool every_step = s.integrator != IntegratorKind::bdf;
+  problem.project = [this, every_step](double t, Eigen::VectorXd& yy) {
+    if (!ws_.solver || !ws_.solver->ldlt.near_singular()) {
+      near_singular_ = false;
+      return false;
+    }
+    if (near_singular_ && !every_step) {
+      ws_.solver->ldlt.clear_near_singular();
+      return false;
+    }
+    near_singular_ = true;
+    const Eigen::VectorXd before = yy;
+    const int n_events = ws_.nc + static_cast<int>(planes_.size());
+    Eigen::VectorXd g_before(n_events), g_after(n_events);
+    if (n_events > 0) problem_events(before.data(), g_before.data());
+    if (!project_onto_constraints(model_, ws_, t, yy)) return false;
+    if (n_events > 0) {
+      problem_events(yy.data(), g_after.data());
+      for (int k = 0; k < n_events; ++k)
+        if ((g_after[k] > 0.0) != (g_before[k] > 0.0)) {
+          yy = before;
+          return false;
+        }
+    }
+    ++projections_;
+    return true;
   };
   IntegratorOptions opt{s.rtol, s.atol, s.max_step, s.max_steps};
   integrator_ = s.integrator == IntegratorKind::bdf ? make_cvode_bdf(problem, opt)
@@ -166,7 +201,11 @@ Simulator::Simulator(const Model& model, Workspace& ws, std::vector<SectionPlane
 
 Simulator::~Simulator() = default;
 
-IntegratorStats Simulator::stats() const { return integrator_->stats(); }
+IntegratorStats Simulator::stats() const {
+  IntegratorStats s = integrator_->stats();
+  s.projections = projections_;
+  return s;
+}
 const char* Simulator::integrator_name() const { return integrator_->name(); }
 
 void Simulator::start(double t, const Eigen::VectorXd& y, const std::vector<ContactState>* modes) {

@@ -159,6 +159,10 @@ class Simulator {
  private:
   const Model& model_;
   Workspace& ws_;
+  bool near_singular_ = false;  ///< the last step ended near a singular position
+  long projections_ = 0;        ///< states moved onto the constraints there
+  /// The event functions of the integrated problem: the clearance joints', then the planes'.
+  void problem_events(const double* y, double* g) const;
   std::vector<SectionPlane> planes_;
   std::unique_ptr<Integrator> integrator_;
   Eigen::VectorXd y_, y_try_, g_event_, ydot_;

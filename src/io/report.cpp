@@ -163,7 +163,7 @@ json report_data(const Model& model, const RunAnalysis& a) {
   d["integrator"] = {{"name", r.integrator}, {"steps", r.stats.steps},
                      {"rejected_steps", r.stats.rejected_steps},
                      {"rhs_evaluations", r.stats.rhs_evaluations},
-                     {"events", r.stats.events},
+                     {"events", r.stats.events}, {"projections", r.stats.projections},
                      {"wall_seconds", r.wall_seconds}, {"outputs", r.outputs}};
   d["max_constraint_violation"] = r.max_constraint_violation;
   // Which parts were read from what the run wrote and which were simulated now.

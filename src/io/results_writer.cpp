@@ -222,6 +222,7 @@ RunStatus ResultsWriter::finish(const RunResult& r) {
                      {"rejected_steps", r.stats.rejected_steps},
                      {"rhs_evaluations", r.stats.rhs_evaluations},
                      {"events", r.stats.events},
+                     {"projections", r.stats.projections},
                      {"wall_seconds", r.wall_seconds},
                      {"outputs", series_rows}};
   json written = json::array();

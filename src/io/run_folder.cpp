@@ -166,6 +166,7 @@ RecordedRun read_run_folder(const std::string& dir, const Model& model) {
     run.result.stats.rejected_steps = in.at("rejected_steps").get<long>();
     run.result.stats.rhs_evaluations = in.at("rhs_evaluations").get<long>();
     run.result.stats.events = in.at("events").get<long>();
+    run.result.stats.projections = in.value("projections", 0L);
     run.result.wall_seconds = in.at("wall_seconds").get<double>();
     run.result.outputs = in.at("outputs").get<long>();
     run.result.missed_events = in.at("missed_events").get<long>();
