@@ -511,4 +511,23 @@ TEST(FixedPatternLdlt, FactorsQuasiDefiniteMatricesAndRecoversFromABadPivot) {
   ldlt.solve(x);
   EXPECT_LT((x - reference).norm(), 1e-12 * reference.norm());
   for (int u = 0; u < n; ++u) EXPECT_GT(sign[u] * ldlt.diagonal()[u], 0.0);
+  // With floors (kPivotFloor): the same bad pivot is set to −floor and the factorisation goes
+  // on (counted, and flagged near-singular); the good matrix is untouched by them; a value that
+  // is not finite still fails.
+  std::vector<double> floor(n, 0.0), near(n, 0.0);
+  for (int u = 0; u < n; ++u)
+    if (sign[u] < 0) floor[u] = 1e-8, near[u] = 1e-6;
+  ldlt.set_row_floors(floor, near);
+  ASSERT_TRUE(ldlt.factorize(upper, sign));
+  EXPECT_EQ(ldlt.clamped(), 0);
+  EXPECT_FALSE(ldlt.near_singular());
+  x = b;
+  ldlt.solve(x);
+  EXPECT_LT((x - reference).norm(), 1e-12 * reference.norm());
+  ASSERT_TRUE(ldlt.factorize(bad, sign));
+  EXPECT_EQ(ldlt.diagonal()[first_row], -1e-8);
+  EXPECT_EQ(ldlt.clamped(), 1);
+  EXPECT_TRUE(ldlt.near_singular());
+  bad.coeffRef(first_row, first_row) = std::nan("");
+  EXPECT_FALSE(ldlt.factorize(bad, sign));
 }
