@@ -55,6 +55,18 @@ def _yaml_value(value: Any) -> str:
     raise TypeError(f"cannot set a {type(value).__name__} as a model value")
 
 
+def _plain(value: Any) -> Any:
+    """`value` with NumPy arrays and scalars (anything with `tolist`) as Python lists and
+    numbers, through dicts, lists and tuples: the data a model file holds."""
+    if isinstance(value, dict):
+        return {k: _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    if not isinstance(value, (str, bytes)) and hasattr(value, "tolist"):
+        return _plain(value.tolist())
+    return value
+
+
 def _flow_yaml(value: Any) -> str:
     """A list or map as one line of YAML flow style, as an override's value must be (a block-style
     map spans lines, and the override reader took its text for a string). Strings inside are
@@ -272,7 +284,7 @@ class Model:
 
     def text(self) -> str:
         """The model file's text, overrides not applied."""
-        return self._text if self._text is not None else _lash.emit_yaml(self._data)
+        return self._text if self._text is not None else _lash.emit_yaml(_plain(self._data))
 
     def compiled(self, extra_overrides: str | Sequence[str] = (),
                  keywords: Optional[Dict[str, str]] = None):
@@ -359,6 +371,7 @@ def load(path: str | bytes | os.PathLike, overrides: str | Iterable[str] = ()) -
 
 def loads(text: str, filename: str = "<string>", overrides: str | Iterable[str] = ()) -> Model:
     """As `load`, from the text of a model file; `filename` is used in messages."""
+    _string("text", text, "the text of a model file (str)")
     model = Model(text, filename=filename, overrides=overrides)
     model.check()
     return model
@@ -554,10 +567,14 @@ def _python_diagnostics(error: ModelError, keywords: Dict[str, str]) -> ModelErr
         if message.endswith(set_with):
             # A solver value: the key the message is about opens it ("output_interval must be
             # > 0", "'end_time' must be a number", "unknown integrator 'rk4'").
+            # The arguments whose key the message names ("end_time / output_interval = 2.4e+10
+            # outputs, more than max_outputs" names both).
             named = [k for p, k in keywords.items()
-                     if element == "solver" and re.match(rf"(unknown )?'?{p.split('.')[-1]}\b", message)]
-            message = message[:-len(set_with)] + (f" (value of the argument {named[0]})" if named
-                                                  else " (value set by an override)")
+                     if element == "solver" and re.search(rf"\b{p.split('.')[-1]}\b", message)]
+            message = message[:-len(set_with)] + (
+                f" (value of the argument {named[0]})" if len(named) == 1 else
+                f" (values of the arguments {', '.join(named)})" if named else
+                " (value set by an override)")
             changed = True
         diagnostics.append((file, line, column, element, message))
     if not changed:

@@ -302,6 +302,21 @@ def test_messages_name_what_was_passed(tmp_path):
     assert "law: coulomb" in m.resolved_yaml()
     m.set("bodies.slider.position", np.array([0.2, 0.0]))
     assert lash.simulate(m, t_end=1e-4).ok
+    # NumPy values in a model's data (a TypeError from the YAML writer before).
+    data = lash.load(FLORES).data
+    data["gravity"] = np.array([0.0, -9.81])
+    data["bodies"]["slider"]["mass"] = np.float64(data["bodies"]["slider"]["mass"])
+    built = lash.Model(data=data)
+    assert "gravity: [0.0, -9.81]" in built.text(), built.text()
+    assert lash.simulate(built, t_end=1e-4).ok
+    # A value refused for what a keyword argument made of it names that argument (it was
+    # "set by an override"), here the output count that output_interval gives.
+    with pytest.raises(lash.ModelError, match=r"more than max_outputs.*\(value of the argument "
+                       r"output_interval\)\n$"):
+        lash.simulate(FLORES, output_interval=1e-12)
+    # Not text at all: a TypeError, as for load (a ModelError "got nothing" before).
+    with pytest.raises(TypeError, match="^text: expected the text of a model file"):
+        lash.loads(None)
     # So do the values Model.set and load's overrides change.
     bad = lash.load(FLORES).set("joints.rod_slider.clearance", -1)
     with pytest.raises(lash.ModelError) as err:
