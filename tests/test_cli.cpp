@@ -1103,15 +1103,21 @@ struct H5Column {
   std::string unit, description;
 };
 
+/// A variable-length UTF-8 string attribute ("<missing>", "<not a variable-length string>":
+/// h5py returns a fixed-length one as bytes).
 std::string h5_string_attribute(hid_t ds, const char* name) {
   const hid_t attr = H5Aopen(ds, name, H5P_DEFAULT);
   if (attr < 0) return "<missing>";
   const hid_t type = H5Aget_type(attr);
-  std::string s(H5Tget_size(type), '\0');
-  H5Aread(attr, type, s.data());
+  std::string s = "<not a variable-length string>";
+  if (H5Tis_variable_str(type) > 0 && H5Tget_cset(type) == H5T_CSET_UTF8) {
+    char* text = nullptr;
+    if (H5Aread(attr, type, &text) >= 0 && text) s = text;
+    H5free_memory(text);
+  }
   H5Tclose(type);
   H5Aclose(attr);
-  return s.substr(0, s.find('\0'));
+  return s;
 }
 
 /// Reads every dataset named in `names` from `path`.

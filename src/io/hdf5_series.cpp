@@ -31,15 +31,16 @@ struct Hdf5Series::Handles {
 
 namespace {
 
-/// A UTF-8 string attribute (units such as "m/s²").
+/// A UTF-8 string attribute (units such as "m/s²"), variable-length: what h5py reads as a str
+/// (a fixed-length one comes back as bytes).
 bool write_string_attribute(hid_t object, const char* name, const std::string& value) {
   const hid_t type = H5Tcopy(H5T_C_S1);
-  H5Tset_size(type, value.empty() ? 1 : value.size());
-  H5Tset_strpad(type, H5T_STR_NULLPAD);
+  H5Tset_size(type, H5T_VARIABLE);
   H5Tset_cset(type, H5T_CSET_UTF8);
   const hid_t space = H5Screate(H5S_SCALAR);
   const hid_t attr = H5Acreate2(object, name, type, space, H5P_DEFAULT, H5P_DEFAULT);
-  const bool ok = attr >= 0 && H5Awrite(attr, type, value.empty() ? "" : value.data()) >= 0;
+  const char* text = value.c_str();
+  const bool ok = attr >= 0 && H5Awrite(attr, type, &text) >= 0;
   if (attr >= 0) H5Aclose(attr);
   H5Sclose(space);
   H5Tclose(type);
