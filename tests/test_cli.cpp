@@ -808,6 +808,47 @@ TEST(Cli, AnalysisOptionsAreRangeChecked) {
   fs::remove_all(dir);
 }
 
+TEST(Cli, TheIdealTwinsRedundantJointIsSaid) {
+  // A double parallelogram whose third coupler pin has clearance: the run has no redundant
+  // equation, its ideal twin (every clearance joint ideal) has one. analyze said nothing of it.
+  const fs::path dir = temp_dir("twin_redundant");
+  fs::create_directories(dir);
+  std::ofstream(dir / "dp.yaml") << R"Y(gravity: [0, -9.81]
+ground: {markers: {G0: [0, 0], G1: [1, 0], G2: [2, 0]}}
+bodies:
+  crank_0: {mass: 1, inertia: 0.08, position: [0.25, 0.4330127018922193], angle: 1.0471975511965976, markers: {O: [-0.5, 0], A: [0.5, 0]}}
+  crank_1: {mass: 1, inertia: 0.08, position: [1.25, 0.4330127018922193], angle: 1.0471975511965976, markers: {O: [-0.5, 0], A: [0.5, 0]}}
+  crank_2: {mass: 1, inertia: 0.08, position: [2.25, 0.4330127018922193], angle: 1.0471975511965976, markers: {O: [-0.5, 0], A: [0.5, 0]}}
+  coupler: {mass: 2, inertia: 0.5, position: [1.5, 0.8660254037844386], markers: {P0: [-1, 0], P1: [0, 0], P2: [1, 0]}}
+clearance_defaults:
+  journal_radius: 9.5e-3
+  material: {youngs_modulus: 207e9, poisson_ratio: 0.3}
+  normal_law: lankarani_nikravesh
+  restitution: 0.9
+  friction: {law: none}
+joints:
+  pivot_0: {type: revolute, journal: crank_0.O, bearing: ground.G0}
+  coupler_0: {type: revolute, journal: crank_0.A, bearing: coupler.P0}
+  pivot_1: {type: revolute, journal: crank_1.O, bearing: ground.G1}
+  coupler_1: {type: revolute, journal: crank_1.A, bearing: coupler.P1}
+  pivot_2: {type: revolute, journal: crank_2.O, bearing: ground.G2}
+  coupler_2: {type: revolute, journal: crank_2.A, bearing: coupler.P2, clearance: 0.5e-3}
+drivers:
+  motor: {joint: pivot_0, speed_rpm: 60}
+solver: {end_time: 0.05, output_interval: 0.001, rtol: 1.0e-8, atol: 1.0e-11}
+)Y";
+  const Result run = run_lash("run " + (dir / "dp.yaml").string() + " -q -o " + (dir / "out").string());
+  ASSERT_EQ(run.code, 0) << run.out;
+  EXPECT_EQ(run.out.find("redundant"), std::string::npos) << run.out;
+  const Result r = run_lash("analyze " + (dir / "out").string());
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("ideal twin: not saved by a run, simulated now; warning: joint 'coupler_2': "
+                       "1 of its 2 equations is redundant with"),
+            std::string::npos)
+      << r.out;
+  fs::remove_all(dir);
+}
+
 TEST(Cli, ADamagedRunFolderIsNamedNotReported) {
   const fs::path dir = temp_dir("damaged");
   ASSERT_EQ(run_lash("run " + example() + " -q -o " + dir.string() + " --set solver.end_time=0.003").code, 0);

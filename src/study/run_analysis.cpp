@@ -756,16 +756,32 @@ Plan plan_analysis(const Model& model, const AnalysisOptions& o) {
   return p;
 }
 
-/// The ideal twin, run to completion (null when not asked for, not possible or failed).
+/// The ideal twin, run to completion (null when not asked for, not possible or failed). Says so
+/// in `prov`: `done` and the twin's own warnings (a redundant joint of the twin: its clearance
+/// joint closed a loop), or why it is missing.
 std::unique_ptr<Keeper> run_twin(const Model& model, const Model& twin_model,
-                                 const AnalysisOptions& o, RunResult& result) {
+                                 const AnalysisOptions& o, RunResult& result, Provenance& prov,
+                                 const std::string& done) {
   if (!o.ideal_twin || o.from || model.clearance_joint_count() == 0) return nullptr;
-  Workspace tws(twin_model);
   auto twin = std::make_unique<Keeper>(twin_model);
-  RunOptions ro;
-  ro.interrupt = o.interrupt;
-  result = simulate(twin_model, tws, *twin, {}, {}, ro);
-  if (!result.status.ok) twin.reset();
+  try {
+    Workspace tws(twin_model);
+    RunOptions ro;
+    ro.interrupt = o.interrupt;
+    result = simulate(twin_model, tws, *twin, {}, {}, ro);
+  } catch (const std::exception& e) {
+    prov.skipped.push_back(std::string("ideal twin (every clearance joint ideal): ") + e.what());
+    return nullptr;
+  }
+  if (!result.status.ok) {
+    if (result.status.outcome != RunOutcome::interrupted)
+      prov.skipped.push_back("ideal twin (every clearance joint ideal): stopped at t = " +
+                             fmt_g(result.status.t) + " s: " + result.status.message);
+    return nullptr;
+  }
+  std::string line = done;
+  for (const std::string& w : result.warnings) line += "; warning: " + w;
+  prov.resimulated.push_back(line);
   return twin;
 }
 
@@ -1122,7 +1138,9 @@ RunAnalysis analyze_run(const Model& model, const AnalysisOptions& o, Observer* 
   // The ideal twin first: the main run compares with it sample by sample.
   const Model twin_model = ideal_model(model);
   RunResult twin_result;
-  std::unique_ptr<Keeper> twin = run_twin(model, twin_model, o, twin_result);
+  Provenance twin_prov;
+  std::unique_ptr<Keeper> twin =
+      run_twin(model, twin_model, o, twin_result, twin_prov, "ideal twin: run beside the main run");
 
   // The main run, observed.
   Workspace ws(model);
@@ -1147,7 +1165,8 @@ RunAnalysis analyze_run(const Model& model, const AnalysisOptions& o, Observer* 
   out.provenance.read.push_back("the main run's outputs, events and sections, observed while it ran");
   if (const std::string none = no_statistics(out, o); !none.empty())
     out.provenance.skipped.push_back(none);
-  if (out.ideal_twin) out.provenance.resimulated.push_back("ideal twin: run beside the main run");
+  for (const std::string& line : twin_prov.resimulated) out.provenance.resimulated.push_back(line);
+  for (const std::string& line : twin_prov.skipped) out.provenance.skipped.push_back(line);
   if (out.lyapunov && out.lyapunov->estimated)
     out.provenance.resimulated.push_back("Lyapunov exponent: " + lyapunov_provenance(*out.lyapunov) +
                                          " from the run's state at the first section after the "
@@ -1176,8 +1195,8 @@ RunAnalysis analyze_recorded_run(const Model& model, const AnalysisOptions& o, R
 
   const Model twin_model = ideal_model(model);
   RunResult twin_result;
-  std::unique_ptr<Keeper> twin = run_twin(model, twin_model, o, twin_result);
-  if (twin) prov.resimulated.push_back("ideal twin: not saved by a run, simulated now");
+  std::unique_ptr<Keeper> twin = run_twin(model, twin_model, o, twin_result, prov,
+                                          "ideal twin: not saved by a run, simulated now");
 
   SampleAnalysis sa(model, cols, o, p.n_out, p.clearance_joints);
   connect(sa, p, twin.get(), &prov.skipped);
