@@ -672,6 +672,13 @@ TEST(StudyRun, AValueErrorOfARunNamesTheStudyNotSet) {
   EXPECT_EQ(bad.status, "error");
   EXPECT_EQ(bad.message.find("--set"), std::string::npos) << bad.message;
   EXPECT_NE(bad.message.find("(a value the study s.yaml sets)"), std::string::npos) << bad.message;
+  // At the key that set it (the message named the model file, with no line).
+  EXPECT_EQ(bad.message.rfind("s.yaml:6:3: driver 'crank': ", 0), 0u) << bad.message;
+  // A bad value in `set:` fails every run: refused before any, at its key.
+  const std::string set = study_problems(
+      "set: {solver.end_time: 0.024, solver.rtol: 5}\nparameters:\n  drivers.crank.speed_rpm: {values: [5000]}\n");
+  EXPECT_NE(set.find("s.yaml:3:31: solver: rtol must be in [1e-14, 0.1]"), std::string::npos) << set;
+  EXPECT_NE(set.find("(a value the study s.yaml sets) (in run 0)"), std::string::npos) << set;
 }
 
 TEST(StudyRun, TransientTimeIsHonouredWithAConstantSpeedDriver) {

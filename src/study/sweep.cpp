@@ -1,6 +1,7 @@
 // Study files, their runs and one run's record (sweep.hpp; format: docs/studies.md).
 #include "study/sweep.hpp"
 
+#include <cctype>
 #include <yaml-cpp/yaml.h>
 
 #include <chrono>
@@ -108,8 +109,38 @@ Diagnostics study_diagnostics(const std::vector<Diagnostic>& in, const StudySpec
     }
     const std::string tail = " (value set with --set)";
     if (d.message.size() > tail.size() &&
-        d.message.compare(d.message.size() - tail.size(), tail.size(), tail) == 0)
+        d.message.compare(d.message.size() - tail.size(), tail.size(), tail) == 0) {
       d.message.replace(d.message.size() - tail.size(), tail.size(), " (a value the study " + spec.file + " sets)");
+      // A refused value is reported where the model reads it; point at the study's key that
+      // set it: the one path whose segments after the first ("rtol" of solver.rtol;
+      // "rod_slider" and "clearance" of joints.rod_slider.clearance) the message names.
+      const std::string said = d.element + " " + d.message;
+      auto names = [&](const std::string& word) {
+        for (size_t at = said.find(word); at != std::string::npos; at = said.find(word, at + 1)) {
+          const auto part = [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; };
+          if ((at == 0 || !part(said[at - 1])) &&
+              (at + word.size() == said.size() || !part(said[at + word.size()])))
+            return true;
+        }
+        return false;
+      };
+      const std::pair<int, int>* mark = nullptr;
+      int found = 0;
+      for (const auto& [path, m] : spec.path_marks) {
+        bool all = path.find('.') != std::string::npos;
+        for (size_t a = path.find('.'); all && a != std::string::npos;) {
+          const size_t b = path.find('.', a + 1);
+          all = names(path.substr(a + 1, b == std::string::npos ? std::string::npos : b - a - 1));
+          a = b;
+        }
+        if (all) mark = &m, ++found;
+      }
+      if (found == 1 && d.line == 0) {
+        d.file = spec.file;
+        d.line = mark->first;
+        d.column = mark->second;
+      }
+    }
     out.push_back(std::move(d));
   }
   return out;
@@ -506,8 +537,11 @@ StudySpec load_study_text(const std::string& text, const std::string& file,
     }
   std::set<std::string> reported;  // path problems, once each
   auto report_paths = [&](size_t i) {
+    // A path the model lacks; a value refused in this run only is that run's error (below).
     for (const auto& d : load_errors[i])
-      if (d.file == file && d.line > 0 && reported.insert(d.str()).second) r.list.push_back(d);
+      if (d.file == file && d.line > 0 && d.message.find(" (a value the study ") == std::string::npos &&
+          reported.insert(d.str()).second)
+        r.list.push_back(d);
   };
   size_t probes = 0;
   for (size_t j = 0; j < spec.parameters.size(); ++j) {
@@ -530,7 +564,7 @@ StudySpec load_study_text(const std::string& text, const std::string& file,
       // A case none of whose runs loads: its model's problems, said to come from the case.
       const YAML::Node key = find_case(params, p.name, p.values[k]).first;
       for (const auto& d : load_errors[it->second.front()])
-        if (!(d.file == file && d.line > 0))
+        if (!(d.file == file && d.line > 0) || d.message.find(" (a value the study ") != std::string::npos)
           r.error(key, "parameter '" + p.name + "': case '" + p.values[k] + "' makes no valid model (" +
                            d.str() + ", in run " + std::to_string(runs[it->second.front()].index) + ")");
     }
