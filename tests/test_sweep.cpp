@@ -432,6 +432,26 @@ TEST(Bifurcation, TheLogisticMapDoublesItsPeriodAtTheKnownParameters) {
   EXPECT_EQ(column_period(columns.back().points, 1e-4), 0);
 }
 
+TEST(SweepCli, CheckOfAStudyFileChecksItAsSweepDoes) {
+  // `lash check` of a study file listed its keys as unknown model keys.
+  const fs::path dir = temp_dir("check");
+  const fs::path good = write_study(
+      dir, "set: {solver.end_time: 0.024}\nparameters:\n  drivers.crank.speed_rpm: {values: [3000, 5000]}\n");
+  Result r = lash_cmd("check " + good.string());
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find(good.string() + ": ok: study 'test', 2 runs of 1 model"), std::string::npos) << r.out;
+  const fs::path bad = write_study(
+      dir, "set: {solver.rtol: 5}\nparameters:\n  drivers.crank.sped_rpm: {values: [3000]}\n", "bad.yaml");
+  r = lash_cmd("check " + bad.string());
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("bad.yaml:3:"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("unknown key 'study'"), std::string::npos) << r.out;
+  r = lash_cmd("check " + good.string() + " --set solver.rtol=1e-9");
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("is a study"), std::string::npos) << r.out;
+  fs::remove_all(dir);
+}
+
 TEST(SweepCli, AKilledStudyResumesWithEveryRunExactlyOnce) {
   const fs::path dir = temp_dir("resume");
   const fs::path study = write_study(

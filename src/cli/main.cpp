@@ -298,6 +298,16 @@ int main(int argc, char** argv) {
       return kExitBadInput;
     }
   }
+  // `lash check` of a study file (a map with `study:`): checked as `lash sweep` checks it, not
+  // as a model (which listed its keys as unknown model keys).
+  if (*check && lash::cli::is_study_file(model_path)) {
+    if (!overrides.empty()) {
+      std::cerr << "error: --set applies to a model; " << model_path
+                << " is a study (its values are set in its set: and parameters:)\n";
+      return kExitBadInput;
+    }
+    return lash::cli::check_study(model_path);
+  }
   lash::LoadedModel loaded;
   try {
     loaded = lash::load_model_file(model_path, overrides);

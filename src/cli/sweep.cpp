@@ -16,6 +16,7 @@
 #include "io/files.hpp"
 #include "study/study_db.hpp"
 #include "study/sweep.hpp"
+#include <yaml-cpp/yaml.h>
 
 #ifdef LASH_MPI
 #include <mpi.h>
@@ -74,6 +75,34 @@ int study_error(const ModelError& e) {
             << " found; nothing was run.\n";
   return kExitBadInput;
 }
+
+}  // namespace
+
+bool is_study_file(const std::string& path) {
+  try {
+    const YAML::Node root = YAML::LoadFile(path);
+    return root.IsMap() && root["study"];
+  } catch (const std::exception&) {
+    return false;
+  }
+}
+
+int check_study(const std::string& path) {
+  try {
+    const StudySpec spec = load_study_file(path);
+    std::cout << path << ": ok: study '" << spec.name << "', " << study_runs(spec).size()
+              << " runs of " << spec.model_texts.size() << " model"
+              << (spec.model_texts.size() == 1 ? "" : "s") << "\n";
+    return kExitOk;
+  } catch (const ModelError& e) {
+    return study_error(e);
+  } catch (const std::exception& e) {
+    std::cerr << "error: " << e.what() << "\n";
+    return kExitBadInput;
+  }
+}
+
+namespace {
 
 /// The end of a sweep: a closing line and the exit code.
 int finish(StudyFolder& f, int total, const Progress& progress, int interrupted_by,

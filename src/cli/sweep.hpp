@@ -42,4 +42,12 @@ class SweepCommand {
 /// runs with their errors. Returns the path written.
 std::string write_study_report(const std::string& folder);
 
+/// True if `path` holds a YAML map with a `study` key (false for anything else, a model or a
+/// file that does not parse: the model loader then reports it).
+bool is_study_file(const std::string& path);
+
+/// `lash check` of a study file: every problem as `lash sweep` finds them before it runs (exit
+/// 2), or a line with its runs and models (exit 0).
+int check_study(const std::string& path);
+
 }  // namespace lash::cli
