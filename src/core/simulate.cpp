@@ -43,6 +43,21 @@ bool mode_contradicts(bool in_contact, double delta) {
 /// acceleration at the last evaluation).
 std::string describe_contacts(const Model& model, const Workspace& ws) {
   std::ostringstream s;
+  // The load with the largest force or torque first (a NaN one before all): a load that
+  // diverges is as likely a cause as a contact.
+  int strongest = -1;
+  double most = -1.0;
+  for (size_t l = 0; l < ws.load_out.size() && l < model.loads.size(); ++l) {
+    const LoadOutput& o = ws.load_out[l];
+    const double size = std::max(std::hypot(o.force.x(), o.force.y()), std::abs(o.torque));
+    if (!(size <= most)) most = size, strongest = static_cast<int>(l);
+  }
+  if (strongest >= 0 && most != 0.0) {
+    const LoadOutput& o = ws.load_out[strongest];
+    s << "load '" << model.loads[strongest].name << "' (the largest): force (" << o.force.x()
+      << ", " << o.force.y() << ") N, torque " << o.torque << " N·m";
+    if (ws.nc > 0) s << "; ";
+  }
   for (int k = 0; k < ws.nc; ++k) {
     const auto& o = ws.clearance_out[k];
     s << (k ? "; " : "") << "joint '" << model.joints[ws.clearance_joints[k]].name
@@ -50,6 +65,7 @@ std::string describe_contacts(const Model& model, const Workspace& ws) {
       << " N";
   }
   if (ws.nc > 0 || ws.nb == 0) return s.str();
+  if (strongest >= 0 && most != 0.0) s << "; ";
   int fastest = 0;
   double largest = -1.0;
   for (int b = 0; b < ws.nb; ++b) {
