@@ -467,19 +467,18 @@ void prepare_constraint_solver(const Model& model, Workspace& ws, const Eigen::M
     ws.warnings = warnings;
     factor_at_assembly();
   }
-  // The floors (kPivotFloor, kNearSingular), once the order is settled, relative to what the
-  // row's pivot measures: for a row after all of its coordinates, W_aa (the pivot is then the
-  // part of the row outside the span of the rows before it); for one anchored before some of
-  // them, its pivot at assembly (a part of W_aa only, which may be small far from any
-  // singular position: 3e-8 W_aa for the 4.5 g pivot of erkaya_compliant_beam.yaml).
+  // The floors (kPivotFloor, kNearSingular), once the order is settled, relative to each row's
+  // pivot at assembly. Not to W_aa: a pivot is the mass-weighted part of the row outside the
+  // span of the rows before it, which bodies of very different mass make a small part of W_aa
+  // far from any singular position (3e-8 W_aa for the 4.5 g pivot of
+  // erkaya_compliant_beam.yaml; about the mass ratio for 1e-8 kg cranks on a 1 kg coupler, whose
+  // rows the floor then softened for good).
   ConstraintSolver& s = *ws.solver;
   s.pivot_reference.clear();
   std::vector<double> floor(nq + ma, 0.0), near(nq + ma, 0.0);
   for (int a = 0; a < ma; ++a) {
     const int p = s.pos[nq + a];
-    bool partial = false;
-    for (int e = s.phi_begin[a]; e < s.phi_begin[a + 1]; ++e) partial |= s.pos[s.phi_col[e]] > p;
-    const double reference = partial ? -s.ldlt.diagonal()[p] : s.w_diag[a];
+    const double reference = -s.ldlt.diagonal()[p];
     s.pivot_reference.push_back(reference);
     floor[p] = kPivotFloor * reference;
     near[p] = kNearSingular * reference;

@@ -46,15 +46,16 @@ inline constexpr double kRedundancyTolerance = 1e-8;
 inline constexpr double kRegularisation = 1e-14;
 
 /// Near a singular position (Φ_q losing rank: a parallelogram in line, a toggle) the pivot of
-/// the row that becomes dependent goes to −εD. A row pivot d_a with |d_a| < kPivotFloor·W_aa is
-/// set to −kPivotFloor·W_aa (a modified LDLᵀ): that row's equation is softened for the instant,
-/// with a compliance of 1/(kPivotFloor·W_aa), so that λ stays bounded and the factorisation never
-/// breaks down; its sign can no longer be lost to round-off. No example comes within a factor
-/// 1e3 of it (tests/test_constraint_solver.cpp), so it changes nothing away from singular
-/// positions.
+/// the row that becomes dependent goes to −εD. A row pivot d_a with |d_a| < kPivotFloor·r_a,
+/// r_a = |d_a| at assembly (ConstraintSolver::pivot_reference), is set to −kPivotFloor·r_a (a
+/// modified LDLᵀ): that row's equation is softened for the instant, with a compliance of
+/// 1/(kPivotFloor·r_a), so that λ stays bounded and the factorisation never breaks down; its sign
+/// can no longer be lost to round-off. No example comes within a factor 1e3 of
+/// kNearSingular·r_a (tests/test_constraint_solver.cpp), so it changes nothing away from
+/// singular positions.
 inline constexpr double kPivotFloor = 1e-8;
 
-/// A row pivot with |d_a| < kNearSingular·W_aa (about 1e-3 rad from a parallelogram's in-line
+/// A row pivot with |d_a| < kNearSingular·r_a (about 1e-3 rad from a parallelogram's in-line
 /// position) marks the configuration as near-singular: the simulation then projects the state
 /// back onto the constraints after each step (project_onto_constraints in core/dynamics.hpp),
 /// which Baumgarte's terms alone cannot be trusted to do there.
@@ -148,8 +149,8 @@ struct ConstraintSolver {
   std::vector<double> w_diag;   ///< per active row: W_aa at assembly (M⁻¹ by its diagonal)
   /// Per active row: its base regularisation ε_a = kRegularisation · W_aa.
   std::vector<double> regularisation;
-  /// Per active row: what its pivot's floor and near-singular threshold are relative to
-  /// (W_aa, or its pivot at assembly for a row eliminated before some of its coordinates).
+  /// Per active row: what its pivot's floor and near-singular threshold are relative to (its
+  /// pivot at assembly, in magnitude).
   std::vector<double> pivot_reference;
   FixedPatternLdlt ldlt;
   Eigen::VectorXd x;            ///< right-hand side, then solution, in elimination order
