@@ -80,7 +80,9 @@ int study_error(const ModelError& e) {
 
 bool is_study_file(const std::string& path) {
   try {
-    const YAML::Node root = YAML::LoadFile(path);
+    // Read as the model loader reads: a FIFO or a device is not opened, a huge file not read
+    // (YAML::LoadFile hung on a FIFO and read /dev/zero without end).
+    const YAML::Node root = YAML::Load(read_input_file(path, kMaxModelFileBytes));
     return root.IsMap() && root["study"];
   } catch (const std::exception&) {
     return false;

@@ -42,8 +42,9 @@ class SweepCommand {
 /// runs with their errors. Returns the path written.
 std::string write_study_report(const std::string& folder);
 
-/// True if `path` holds a YAML map with a `study` key (false for anything else, a model or a
-/// file that does not parse: the model loader then reports it).
+/// True if `path` holds a YAML map with a `study` key (false for anything else, a model, a file
+/// that does not parse or is not a regular file of at most kMaxModelFileBytes: the model loader
+/// then reports it).
 bool is_study_file(const std::string& path);
 
 /// `lash check` of a study file: every problem as `lash sweep` finds them before it runs (exit
