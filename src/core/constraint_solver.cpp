@@ -493,7 +493,7 @@ bool solve_constraints(Workspace& ws) {
   for (const ConstraintSolver::Entry& e : s.phi_varying) v[e.slot] = ws.phi_q(e.row, e.col);
   for (int a = 0; a < ma; ++a) s.x[s.pos[nq + a]] = ws.rhs_m[s.active[a]];
   for (int k = 0; k < nq; ++k) s.x[s.pos[k]] = ws.g[k];
-  for (int a = 0; a < ma; ++a) v[s.slot_reg[a]] = -s.regularisation[a];
+  // The −ε entries keep the values written at assembly (prepare_constraint_solver).
   const bool ok = s.ldlt.factorize(s.k, s.sign);
   if (!ok) return false;
   s.ldlt.solve(s.x);

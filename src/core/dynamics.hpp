@@ -142,8 +142,8 @@ void update_kin(Workspace& ws, const double* y);
 
 /// Evaluates ẏ = f(t, y); fills the workspace's outputs (λ, contact and load quantities,
 /// energies). Allocates nothing (after the first call, which sets up the constraint solver if
-/// assembly has not). Returns false if the constraint system cannot be factored even
-/// regularised, or a value is not finite. Throws std::runtime_error if an expression cannot be evaluated.
+/// assembly has not). Returns false if a value is not finite (the constraint system itself
+/// always factors: constraint_solver.hpp, kPivotFloor). Throws std::runtime_error if an expression cannot be evaluated.
 bool evaluate(const Model& model, Workspace& ws, double t, const double* y, double* ydot);
 
 /// Event functions, one per clearance joint: g_k = s_k δ_k with s_k = +1 in free flight and −1 in

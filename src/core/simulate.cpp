@@ -1,4 +1,3 @@
-#include <cstdlib>
 #include "core/simulate.hpp"
 
 #include <cstdio>
