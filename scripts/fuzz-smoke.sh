@@ -11,8 +11,21 @@
 #   LASH_FUZZ_JOBS     parallel compile jobs for the build, default: number of cores
 #   CXX                the clang++ to use, default clang++ (Debian: scripts/install-deps.sh)
 # Needs clang and libclang-rt-14-dev (the libFuzzer runtime), which scripts/install-deps.sh
-# installs. Run from anywhere; `make test` runs it as the ctest fuzz_model_loader_smoke.
+# installs. Run from anywhere.
+#
+# Options: --build-only builds the fuzzer and stops; --run-only runs a fuzzer already built (it
+# fails if there is none). `make test` runs the two halves as the ctests fuzz_model_loader_build
+# and fuzz_model_loader_smoke, so that the build (minutes on a cold machine) and the bounded
+# fuzzing run each have their own time-out.
 set -euo pipefail
+
+mode=all
+case "${1:-}" in
+  "") ;;
+  --build-only) mode=build ;;
+  --run-only) mode=run ;;
+  *) echo "fuzz-smoke: unknown option '$1' (expected --build-only or --run-only)" >&2; exit 2 ;;
+esac
 
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build="$root/build-fuzz"
@@ -26,12 +39,18 @@ if ! command -v "$cxx" >/dev/null; then
   exit 1
 fi
 
-# Build: only the fuzzer and the libraries it links.
-echo "fuzz-smoke: building $build/fuzz/fuzz_model_loader"
-cmake -S "$root" -B "$build" -G Ninja -DCMAKE_CXX_COMPILER="$cxx" \
-      -DCMAKE_BUILD_TYPE=RelWithDebInfo -DLASH_FUZZ=ON -DLASH_TESTS=OFF -DLASH_BENCH=OFF >/dev/null
-cmake --build "$build" --target fuzz_model_loader -j "$jobs"
 fuzzer="$build/fuzz/fuzz_model_loader"
+if [ "$mode" != run ]; then
+  # Build: only the fuzzer and the libraries it links.
+  echo "fuzz-smoke: building $fuzzer"
+  cmake -S "$root" -B "$build" -G Ninja -DCMAKE_CXX_COMPILER="$cxx" \
+        -DCMAKE_BUILD_TYPE=RelWithDebInfo -DLASH_FUZZ=ON -DLASH_TESTS=OFF -DLASH_BENCH=OFF >/dev/null
+  cmake --build "$build" --target fuzz_model_loader -j "$jobs"
+  if [ "$mode" = build ]; then exit 0; fi
+elif [ ! -x "$fuzzer" ]; then
+  echo "fuzz-smoke: $fuzzer is not built; run scripts/fuzz-smoke.sh --build-only first" >&2
+  exit 1
+fi
 
 # Sanitizers: stop at the first report, with a stack; libFuzzer then saves the input.
 export ASAN_OPTIONS="${ASAN_OPTIONS:+$ASAN_OPTIONS:}abort_on_error=1:detect_leaks=1:symbolize=1"

@@ -68,7 +68,7 @@ constexpr int kPatternProbes = 3;
 JacobianPattern jacobian_pattern(const Model& model, Workspace& ws, double t, const double* y,
                                  const Eigen::MatrixXd& phi_q) {
   JacobianPattern pattern{phi_q.array() != 0.0,
-                          Eigen::Array<bool, Eigen::Dynamic, Eigen::Dynamic>::Ones(ws.m, ws.nq)};
+                          Eigen::Array<bool, Eigen::Dynamic, Eigen::Dynamic>::Ones(ws.m, ws.nq), {}};
   Eigen::VectorXd probe = Eigen::Map<const Eigen::VectorXd>(y, ws.ny);
   Eigen::VectorXd phi(ws.m);
   Eigen::MatrixXd pq(ws.m, ws.nq);

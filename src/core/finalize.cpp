@@ -50,13 +50,6 @@ class Checker {
   /// An angle to drive, load or lock: the ground, a rigid body, or a flexible link (its axis at
   /// a point, kinematics.hpp: point_angle); not a point mass.
   bool has_angle(int b) const { return rotates(b) || flexible(b); }
-  /// The element kinds a flexible link takes, for messages.
-  static constexpr const char* kOnFlexible =
-      "a flexible link takes revolute joints (with or without clearance), fixed joints to a rigid "
-      "body or the ground (a clamped end), distance joints, forces, torques, spring-dampers, "
-      "torsional spring-dampers, bushings and sensors at its markers, drivers of its revolute "
-      "joints, translational joints as the slider, and fixed joints to other links; pin a short "
-      "rigid body to it for the rest";
   std::string body_name(int b) const { return b == kGround ? "ground" : m_.bodies[b].name; }
 
   void names() {

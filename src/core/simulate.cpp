@@ -260,7 +260,7 @@ void Simulator::resume(const State& state) {
   integrator_->reset(t_, y_, state.step);
 }
 
-State Simulator::snapshot() const { return {t_, y_, ws_.contact, integrator_->step_hint()}; }
+State Simulator::snapshot() const { return {t_, y_, ws_.contact, integrator_->step_hint(), {}}; }
 
 void Simulator::set_interrupt(const std::atomic<int>* flag) {
   interrupt_ = flag;
