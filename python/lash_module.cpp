@@ -363,7 +363,10 @@ py::dict analyze(const CompiledModel& cm, const py::dict& options) {
       cd["rms_deviation"] = c.rms_deviation;
       cd["max_deviation"] = c.max_deviation;
       cd["ideal_peak"] = c.ideal_peak;
-      cd["peak_ratio"] = c.peak_ratio;
+      if (std::isnan(c.peak_ratio))
+        cd["peak_ratio"] = py::none();
+      else
+        cd["peak_ratio"] = c.peak_ratio;
       cmp[py::str(c.channel)] = cd;
     }
     d["ideal_twin"] = cmp;

@@ -676,6 +676,18 @@ TEST(Cli, AWriteErrorStopsTheRunWithExitThreeAndWholeRows) {
   EXPECT_GE(line_count(dir / "events.csv"), 2u) << "the events before the failure were lost";
   EXPECT_EQ(summary["integrator"]["outputs"].get<long>() + 1,
             static_cast<long>(line_count(dir / "timeseries.csv")));
+  // The last row on disk is the time the message and summary.json give (they said the time the
+  // run had reached, later than the last row that fitted).
+  {
+    std::ifstream in(dir / "timeseries.csv");
+    std::string line, last;
+    while (std::getline(in, line)) last = line;
+    const double t_last = std::stod(last.substr(0, last.find(',')));
+    EXPECT_EQ(summary["output"]["last_time"].get<double>(), t_last);
+    std::ostringstream said;
+    said << "(up to t = " << t_last << " s) are whole";
+    EXPECT_NE(r.out.find(said.str()), std::string::npos) << r.out;
+  }
   // `lash analyze` refuses the folder and says why, without suggesting --from (a run stopped
   // by a write error leaves no final state).
   const Result an = run_lash("analyze " + dir.string() + " --no-lyapunov");
@@ -1307,6 +1319,10 @@ TEST(Cli, AnHdf5FileThatCannotGrowKeepsItsChunksAndCloses) {
     const auto j = read_summary(dir);
     EXPECT_EQ(j["status"]["outcome"], "write_error");
     EXPECT_EQ(j["output"]["rows"].get<long>(), chunks * 4096);
+    if (chunks == 0)
+      EXPECT_TRUE(j["output"]["last_time"].is_null()) << j["output"];
+    else
+      EXPECT_NEAR(j["output"]["last_time"].get<double>(), (chunks * 4096 - 1) * 1e-5, 1e-12);
     std::vector<std::string> names = {"time", "slider.x", "rod_slider.Fn"};
     const auto cols = read_h5(dir / "timeseries.h5", names);
     ASSERT_EQ(cols.size(), names.size());

@@ -108,6 +108,12 @@ TEST(Report, FloresExampleDataIsCompleteAndConsistent) {
   const auto& cmp = d["analysis"]["comparison"]["slider.ax"];
   EXPECT_NEAR(cmp["ideal_peak"].get<double>(), 19419, 30);
   EXPECT_GT(cmp["peak_ratio"].get<double>(), 1.0);
+  // The ideal twin dissipates nothing (no clearance joint), the run does: no ratio, null (it
+  // was 0, as if the clearance removed the channel).
+  const auto& dissipated = d["analysis"]["comparison"]["energy.dissipated"];
+  EXPECT_EQ(dissipated["ideal_peak"].get<double>(), 0.0);
+  EXPECT_GT(dissipated["max_deviation"].get<double>(), 0.0);
+  EXPECT_TRUE(dissipated["peak_ratio"].is_null()) << dissipated.dump();
   // Modes: shares add up, impacts match the onsets, the histogram counts every impact.
   const auto& cj = d["analysis"]["clearance"]["rod_slider"];
   const auto& m = cj["modes"];

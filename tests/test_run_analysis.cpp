@@ -235,6 +235,10 @@ TEST(RunAnalysis, FloresExampleResultsAreCompleteAndConsistent) {
   EXPECT_NEAR(cmp.ideal_peak, 19419, 30);
   EXPECT_GT(cmp.peak_ratio, 1.0);
   EXPECT_DOUBLE_EQ(cmp.peak_ratio, stat(r, "slider.ax").peak / cmp.ideal_peak);
+  // A channel that is 0 in the ideal twin (it dissipates nothing) has no ratio.
+  EXPECT_EQ(comparison(r, "energy.dissipated").ideal_peak, 0.0);
+  EXPECT_GT(stat(r, "energy.dissipated").peak, 0.0);
+  EXPECT_TRUE(std::isnan(comparison(r, "energy.dissipated").peak_ratio));
   EXPECT_GE(cmp.max_deviation, cmp.rms_deviation);
   // Modes: shares add up, impacts match the onsets, the histogram counts every impact.
   ASSERT_EQ(r.clearance.size(), 1u);

@@ -626,9 +626,13 @@ int main(int argc, char** argv) {
                 << "summary.json and final_state.json are in " << out_dir << "/\n";
       break;
     case lash::RunOutcome::write_error:
-      std::cerr << "\nerror: " << status.message << "\nthe rows written before it (up to t = "
-                << status.t << " s at most) are whole; summary.json in " << out_dir
-                << "/ says what happened\n";
+      std::cerr << "\nerror: " << status.message << "\n";
+      if (std::isnan(writer->last_row_time()))
+        std::cerr << "no row of the time series reached the disk";
+      else
+        std::cerr << "the rows written before it (up to t = " << writer->last_row_time()
+                  << " s) are whole";
+      std::cerr << "; summary.json in " << out_dir << "/ says what happened\n";
       break;
     case lash::RunOutcome::failed:
       print_notes(std::cerr);

@@ -9,6 +9,8 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 
@@ -177,6 +179,32 @@ long long drop_last_rows(const std::string& path, std::size_t bytes) {
   ::close(fd);
   if (rc != 0) throw IoError(path, "cannot shorten: " + errno_text(err));
   return dropped;
+}
+
+double last_row_time(const std::string& path) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NOFOLLOW);
+  if (fd < 0) return std::nan("");
+  struct stat st {};
+  std::string tail;  // the file's end, read back in blocks until it holds two line ends
+  off_t end = ::fstat(fd, &st) == 0 ? st.st_size : 0;
+  constexpr off_t kBlock = 1 << 16;
+  while (end > 0 && std::count(tail.begin(), tail.end(), '\n') < 2) {
+    const off_t n = std::min(end, kBlock);
+    std::string block(static_cast<std::size_t>(n), '\0');
+    if (::pread(fd, block.data(), block.size(), end - n) != static_cast<ssize_t>(n)) break;
+    tail.insert(0, block);
+    end -= n;
+  }
+  ::close(fd);
+  // Rows end in '\n'; the last one starts after the line end before it. Its start must not be
+  // the file's start (that row is the header).
+  if (tail.size() < 2 || tail.back() != '\n') return std::nan("");
+  const std::size_t prev = tail.rfind('\n', tail.size() - 2);
+  if (prev == std::string::npos) return std::nan("");
+  const char* first = tail.c_str() + prev + 1;
+  char* stop = nullptr;
+  const double t = std::strtod(first, &stop);
+  return stop != first && (*stop == ',' || *stop == '\n') ? t : std::nan("");
 }
 
 FolderLock::FolderLock(const std::string& folder) {

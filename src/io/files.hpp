@@ -66,6 +66,10 @@ class RowFile {
 /// full disk: room for the summary that says what the rows are. Throws IoError.
 long long drop_last_rows(const std::string& path, std::size_t bytes);
 
+/// The first field of the last whole row of the row file at `path` (a time series' time), read
+/// from the end; NaN when the file has no row after its header or cannot be read.
+double last_row_time(const std::string& path);
+
 /// Owns a run folder while a command writes into it: an exclusive lock on FOLDER/.lash.lock
 /// (flock, released when the process ends, however it ends). A second `lash` writing into the
 /// same folder is refused instead of mixing its rows with the first one's.

@@ -155,6 +155,7 @@ void Hdf5Series::write_buffered() {
   }
   h_->flushed_size = file_size(path_);
   rows_ += static_cast<long long>(n);
+  last_time_ = columns_[0].back();  // the time column
   for (auto& col : columns_) col.clear();
 }
 

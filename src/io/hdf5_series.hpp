@@ -7,6 +7,7 @@
 /// flushed (H5Fflush) after every chunk, so the rows on disk grow as the run goes and every
 /// dataset has the same length after each flush. Built only when HDF5 (Debian's libhdf5-dev,
 /// serial) was found; hdf5_available() says whether it was.
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -40,6 +41,8 @@ class Hdf5Series {
   bool is_open() const;
   /// Rows in the file as of its last flush.
   long long rows_written() const { return rows_; }
+  /// The time of the last row in the file as of its last flush; NaN before the first.
+  double last_time() const { return last_time_; }
   const std::string& path() const { return path_; }
 
  private:
@@ -50,6 +53,7 @@ class Hdf5Series {
   std::unique_ptr<Handles> h_;
   std::vector<std::vector<double>> columns_;  ///< buffered rows, column by column
   long long rows_ = 0;
+  double last_time_ = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// Reads the rows of a timeseries.h5 back, one chunk of every dataset at a time (memory: one

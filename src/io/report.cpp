@@ -233,7 +233,8 @@ json report_data(const Model& model, const RunAnalysis& a) {
     json cmp = json::object();
     for (const auto& c : a.ideal_twin->comparison)
       cmp[c.channel] = {{"rms_deviation", c.rms_deviation}, {"max_deviation", c.max_deviation},
-                        {"ideal_peak", c.ideal_peak}, {"peak_ratio", c.peak_ratio}};
+                        {"ideal_peak", c.ideal_peak},
+                        {"peak_ratio", std::isnan(c.peak_ratio) ? json(nullptr) : json(c.peak_ratio)}};
     an["comparison"] = cmp;
   } else {
     an["comparison"] = nullptr;

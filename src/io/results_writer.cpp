@@ -159,8 +159,15 @@ RunStatus ResultsWriter::finish(const RunResult& r) {
       h5_->abandon();
     }
   }
-  // Rows of the time series on disk (the CSV's header is not one).
+  // Rows of the time series on disk (the CSV's header is not one), and the last one's time.
   const long long series_rows = h5_ ? h5_->rows_written() : std::max(0LL, ts_.rows_written() - 1);
+  auto last_time_on_disk = [&] {
+    if (h5_) return h5_->last_time();
+    if (write_error_.empty()) return series_rows > 0 ? t_last_ : std::nan("");
+    return lash::last_row_time(ts_.path());  // not every row computed reached the file
+  };
+  last_row_time_ = last_time_on_disk();
+  auto time_or_null = [](double t) { return std::isnan(t) ? nlohmann::json() : nlohmann::json(t); };
   if (r.final_state.y.size() > 0) {
     try {
       write_state(folder_ + "/final_state.json", model_, Workspace(model_), r.final_state);
@@ -230,6 +237,7 @@ RunStatus ResultsWriter::finish(const RunResult& r) {
   j["output"] = {{"format", h5_ ? "hdf5" : "csv"},
                  {"file", h5_ ? "timeseries.h5" : "timeseries.csv"},
                  {"rows", series_rows},
+                 {"last_time", time_or_null(last_row_time_)},
                  {"patterns", output_.channels},
                  {"channels", written}};
   j["max_constraint_violation"] = r.max_constraint_violation;
@@ -263,6 +271,8 @@ RunStatus ResultsWriter::finish(const RunResult& r) {
     const long long dropped = drop_last_rows(folder_ + "/timeseries.csv", 2 * text().size() + 8192);
     j["integrator"]["outputs"] = std::max(0LL, ts_.rows_written() - 1 - dropped);
     j["output"]["rows"] = j["integrator"]["outputs"];
+    last_row_time_ = lash::last_row_time(folder_ + "/timeseries.csv");
+    j["output"]["last_time"] = time_or_null(last_row_time_);
     j["status"]["message"] = status.message + "; the last " + std::to_string(dropped) +
                              " rows of timeseries.csv were removed to make room for this summary";
     status.message = j["status"]["message"].get<std::string>();

@@ -13,6 +13,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <memory>
 #include <string>
 #include <vector>
@@ -48,6 +49,9 @@ class ResultsWriter : public Observer {
   }
   /// The first write error, once one happened: the run stops at its next output.
   std::string stop_reason() const override { return write_error_; }
+  /// After finish: the time of the last row of the time series on disk (NaN when there is
+  /// none). Below the run's last output time when a write failed.
+  double last_row_time() const { return last_row_time_; }
 
   /// Closes the CSV files, writes final_state.json and, last and atomically, summary.json (with
   /// every channel's unit and description). Returns the run's status as recorded: `result`'s,
@@ -81,6 +85,7 @@ class ResultsWriter : public Observer {
   std::string from_;
   RowFile ts_, ev_;
   std::string write_error_;
+  double last_row_time_ = std::nan("");
   nlohmann::json extra_ = nlohmann::json::object();
   std::vector<ChannelInfo> channels_;
   OutputSettings output_;

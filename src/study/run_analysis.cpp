@@ -944,7 +944,7 @@ RunAnalysis analyze_samples(const Model& model, const AnalysisOptions& o, Plan& 
       cmp.rms_deviation = std::sqrt(sa.dev_sq[i] / sa.dev_n[i]);
       cmp.max_deviation = sa.dev_max[i];
       cmp.ideal_peak = ideal_peak;
-      cmp.peak_ratio = ideal_peak > 0 ? st.peak / ideal_peak : 0.0;
+      cmp.peak_ratio = ideal_peak > 0 ? st.peak / ideal_peak : std::nan("");
       out.ideal_twin->comparison.push_back(cmp);
     }
   }

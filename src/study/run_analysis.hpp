@@ -78,7 +78,8 @@ struct ChannelComparison {
   double rms_deviation = 0.0;   ///< sqrt(mean (v − v_ideal)²), channel units
   double max_deviation = 0.0;   ///< max |v − v_ideal|
   double ideal_peak = 0.0;      ///< max |v_ideal| over the whole twin run
-  double peak_ratio = 0.0;      ///< peak with clearance (statistics window) / ideal_peak; 0 if that is 0
+  double peak_ratio = 0.0;      ///< peak with clearance (statistics window) / ideal_peak; NaN
+                                ///< (null in report_data, None in Python) if that is 0
 };
 
 /// The model with every clearance joint made ideal, run to completion.

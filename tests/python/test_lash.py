@@ -201,6 +201,10 @@ def test_analysis():
     assert p["kind"] == "stroboscopic" and p["points"].shape[1] == 2 and len(p["times"]) >= 1
     assert a["verdict"]["kind"] in {"periodic", "quasi-periodic", "chaotic", "undetermined"}
     assert "slider.ax" in a["spectra"] and a["ideal_twin"] is not None
+    assert a["ideal_twin"]["slider.ax"]["peak_ratio"] > 1
+    # The ideal twin dissipates nothing (no clearance joint): no ratio (None, not 0).
+    dissipated = a["ideal_twin"]["energy.dissipated"]
+    assert dissipated["ideal_peak"] == 0 and dissipated["peak_ratio"] is None
     # The model-free functions: a sine of amplitude 3 on bin 8 reads 3 there.
     n, dt = 256, 1e-3
     t = np.arange(n) * dt
