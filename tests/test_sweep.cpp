@@ -436,10 +436,32 @@ TEST(SweepCli, CheckOfAStudyFileChecksItAsSweepDoes) {
   // `lash check` of a study file listed its keys as unknown model keys.
   const fs::path dir = temp_dir("check");
   const fs::path good = write_study(
-      dir, "set: {solver.end_time: 0.024}\nparameters:\n  drivers.crank.speed_rpm: {values: [3000, 5000]}\n");
+      dir, "set: {solver.end_time: 0.024}\ntransient: {periods: 1}\n"
+           "parameters:\n  drivers.crank.speed_rpm: {values: [3000, 5000]}\n");
   Result r = lash_cmd("check " + good.string());
   EXPECT_EQ(r.code, 0) << r.out;
   EXPECT_NE(r.out.find(good.string() + ": ok: study 'test', 2 runs of 1 model"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("warning"), std::string::npos) << r.out;
+  // Each run is checked as the sweep starts it. With the default transient (5 periods: 0.1 s at
+  // 3000 rpm) every run would be an error: refused, the runs named (it said "ok").
+  const fs::path all_bad = write_study(
+      dir, "set: {solver.end_time: 0.024}\nparameters:\n  drivers.crank.speed_rpm: {values: [3000, 5000]}\n",
+      "all_bad.yaml");
+  r = lash_cmd("check " + all_bad.string());
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("error: run 0: the transient (0.1 s) is not shorter than the run (0.024 s)"),
+            std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("every one of 2 runs would be an error"), std::string::npos) << r.out;
+  // A value bad in some runs only: a warning at the study's key naming those runs, exit 0.
+  const fs::path some_bad = write_study(
+      dir, "set: {solver.end_time: 0.024}\ntransient: {periods: 1}\nparameters:\n"
+           "  drivers.crank.speed_rpm: {values: [3000, 5000]}\n"
+           "  joints.rod_slider.clearance: {values: [0.5e-3, -1.0e-4]}\n", "some_bad.yaml");
+  r = lash_cmd("check " + some_bad.string());
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("warning: runs 1, 3: " + some_bad.string() + ":7:3: joint 'rod_slider': clearance must be >= 0"),
+            std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("4 runs of 1 model; 2 of them would be recorded as errors"), std::string::npos) << r.out;
   const fs::path bad = write_study(
       dir, "set: {solver.rtol: 5}\nparameters:\n  drivers.crank.sped_rpm: {values: [3000]}\n", "bad.yaml");
   r = lash_cmd("check " + bad.string());

@@ -92,9 +92,51 @@ bool is_study_file(const std::string& path) {
 int check_study(const std::string& path) {
   try {
     const StudySpec spec = load_study_file(path);
-    std::cout << path << ": ok: study '" << spec.name << "', " << study_runs(spec).size()
-              << " runs of " << spec.model_texts.size() << " model"
-              << (spec.model_texts.size() == 1 ? "" : "s") << "\n";
+    const auto runs = study_runs(spec);
+    // Every run's model and transient, as the sweep would start it (a few milliseconds each);
+    // past kCheckedRuns, runs spread evenly over the study.
+    constexpr std::size_t kCheckedRuns = 5000;
+    const std::size_t stride = (runs.size() + kCheckedRuns - 1) / kCheckedRuns;
+    std::size_t checked = 0;
+    std::vector<std::pair<std::string, std::vector<int>>> errors;  // message → runs, in order
+    for (std::size_t i = 0; i < runs.size(); i += stride) {
+      ++checked;
+      const std::string e = study_run_error(spec, runs[i]);
+      if (e.empty()) continue;
+      auto it = std::find_if(errors.begin(), errors.end(), [&](const auto& p) { return p.first == e; });
+      if (it == errors.end()) it = errors.insert(errors.end(), {e, {}});
+      it->second.push_back(runs[i].index);
+    }
+    std::size_t bad = 0;
+    for (const auto& [e, list] : errors) bad += list.size();
+    const std::string of =
+        checked == runs.size() ? std::to_string(runs.size()) + " runs"
+                               : std::to_string(checked) + " of its " + std::to_string(runs.size()) +
+                                     " runs (one in " + std::to_string(stride) + ")";
+    const std::string models =
+        std::to_string(spec.model_texts.size()) + " model" + (spec.model_texts.size() == 1 ? "" : "s");
+    if (bad == 0) {
+      std::cout << path << ": ok: study '" << spec.name << "', " << of << " of " << models << "\n";
+      return kExitOk;
+    }
+    // What the sweep would record as errors, each message once with its runs.
+    constexpr std::size_t kShown = 10;
+    for (std::size_t k = 0; k < errors.size() && k < kShown; ++k) {
+      const auto& [e, list] = errors[k];
+      std::string which;
+      for (std::size_t n = 0; n < list.size() && n < 8; ++n) which += (n ? ", " : "") + std::to_string(list[n]);
+      if (list.size() > 8) which += ", … (" + std::to_string(list.size()) + " runs)";
+      std::cerr << (bad == checked ? "error" : "warning") << ": run" << (list.size() == 1 ? " " : "s ")
+                << which << ": " << e << "\n";
+    }
+    if (errors.size() > kShown)
+      std::cerr << "… and " << errors.size() - kShown << " more messages\n";
+    if (bad == checked) {
+      std::cerr << path << ": every one of " << of << " would be an error; nothing would be computed\n";
+      return kExitBadInput;
+    }
+    std::cout << path << ": ok: study '" << spec.name << "', " << of << " of " << models << "; "
+              << bad << " of them would be recorded as errors (above)\n";
     return kExitOk;
   } catch (const ModelError& e) {
     return study_error(e);

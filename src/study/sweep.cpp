@@ -817,7 +817,39 @@ class Keep : public Observer {
   ChannelExtrema extrema_;
 };
 
+/// The end of a run's transient, the run starting at t_begin: `time` seconds when the study gives
+/// it, else `periods` periods of the driver (none without one). Throws std::invalid_argument
+/// when it is not shorter than the run.
+double transient_end(const StudySpec& spec, const Model& model, const Driver* drv, double t_begin) {
+  const double period = drv ? 2 * M_PI / std::abs(drv->speed) : 0.0;
+  const double t_transient =
+      t_begin + (spec.discard_time >= 0 ? spec.discard_time : period > 0 ? spec.discard_periods * period : 0.0);
+  if (t_transient >= model.solver.end_time)
+    throw std::invalid_argument("the transient (" + number_text(t_transient - t_begin) +
+                                " s) is not shorter than the run (" +
+                                number_text(model.solver.end_time - t_begin) + " s)");
+  return t_transient;
+}
+
+/// A record's message: no trailing white space (a ModelError's text ends in a line end).
+std::string trimmed(std::string message) {
+  while (!message.empty() && std::isspace(static_cast<unsigned char>(message.back()))) message.pop_back();
+  return message;
+}
+
 }  // namespace
+
+std::string study_run_error(const StudySpec& spec, const StudyRun& run) {
+  try {
+    const LoadedModel lm = load_model_text(spec.model_texts.at(run.model), run.model, run.overrides);
+    if (run.previous < 0) transient_end(spec, lm.model, period_driver(lm.model, ""), 0.0);
+    return "";
+  } catch (const ModelError& e) {
+    return trimmed(ModelError(study_diagnostics(e.diagnostics(), spec)).what());
+  } catch (const std::exception& e) {
+    return trimmed(e.what());
+  }
+}
 
 RunRecord run_study_point(const StudySpec& spec, const StudyRun& run, const std::atomic<int>* interrupt,
                           const RunRecord* previous) {
@@ -870,14 +902,7 @@ RunRecord run_study_point(const StudySpec& spec, const StudyRun& run, const std:
     const Model& model = lm.model;
     const double t_begin = from ? from->t : 0.0;
     const double period = drv ? 2 * M_PI / std::abs(drv->speed) : 0.0;
-    // The transient: `time` seconds when given, else `periods` periods of the driver (none
-    // without one).
-    const double t_transient =
-        t_begin + (spec.discard_time >= 0 ? spec.discard_time : period > 0 ? spec.discard_periods * period : 0.0);
-    if (t_transient >= model.solver.end_time)
-      throw std::invalid_argument("the transient (" + number_text(t_transient - t_begin) +
-                                  " s) is not shorter than the run (" +
-                                  number_text(model.solver.end_time - t_begin) + " s)");
+    const double t_transient = transient_end(spec, model, drv, t_begin);
     AnalysisOptions ao;
     ao.from = from ? &*from : nullptr;
     ao.ideal_twin = false;
@@ -957,8 +982,7 @@ RunRecord run_study_point(const StudySpec& spec, const StudyRun& run, const std:
     rec.status = "error";
     rec.message = e.what();
   }
-  while (!rec.message.empty() && std::isspace(static_cast<unsigned char>(rec.message.back())))
-    rec.message.pop_back();
+  rec.message = trimmed(rec.message);
   rec.wall_seconds = elapsed();
   return rec;
 }

@@ -112,6 +112,12 @@ nlohmann::json state_json(const State& state);
 State state_from_json(const nlohmann::json& j);
 RunRecord record_from_json(const nlohmann::json& j);
 
+/// What the sweep would record as the run's error before simulating it: its model refused (a
+/// value the study gives, pointed at the study's key) or its transient not shorter than the run;
+/// "" when it would start. A continued run's transient is not checked (it starts where the run
+/// before it ends). `lash check` of a study.
+std::string study_run_error(const StudySpec& spec, const StudyRun& run);
+
 /// Runs one point of the study. Never throws for a bad parameter combination or a failing run:
 /// the record says what happened. `interrupt` (a signal number when set) stops the run within
 /// one integrator step; the record is then "interrupted" and must not be kept.
