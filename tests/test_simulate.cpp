@@ -181,6 +181,32 @@ TEST(Failure, JournalDrivenThroughItsBearingStopsWithAStatus) {
   EXPECT_NEAR(r.rec->time.back(), r.result.status.t, 1e-12);
 }
 
+TEST(Failure, AJournalThroughItsBearingBetweenOutputsStopsTheRun) {
+  // K = 5e6 N/m^1.5: at t = 1.36 ms the journal sinks past its own radius (9.5 mm) and comes
+  // back out before the next output (every 5 ms). The check at outputs let it complete, with
+  // δ reaching 12 mm at 47.6 ms; the event function δ − R_j now stops it where δ reaches R_j,
+  // under both integrators, with a last row there.
+  for (const char* integrator : {"dopri5", "bdf"}) {
+    const SimRun r = run_example("flores_slider_crank.yaml",
+                                 {"clearance_defaults.stiffness=5e6", "solver.output_interval=5e-3",
+                                  "solver.end_time=0.05", std::string("solver.integrator=") + integrator});
+    ASSERT_FALSE(r.result.status.ok) << integrator;
+    EXPECT_EQ(r.result.status.element, "rod_slider") << integrator;
+    EXPECT_NE(r.result.status.message.find("through its bearing"), std::string::npos) << r.result.status.message;
+    EXPECT_GT(r.result.status.t, 1.0e-3) << integrator;
+    EXPECT_LT(r.result.status.t, 1.7e-3) << integrator;
+    ASSERT_EQ(r.rec->time.size(), 2u) << integrator;  // t = 0 and the stop, off the output grid
+    EXPECT_EQ(r.rec->time.back(), r.result.status.t) << integrator;
+    EXPECT_NEAR(r.rec->data.at("rod_slider.delta").back(), 9.5e-3, 1e-9) << integrator;
+    EXPECT_NEAR(r.result.final_state.t, r.result.status.t, 0.0) << integrator;
+  }
+  // Stiffer (1e7): δ peaks at 6.6 mm, below the radius; the run completes.
+  const SimRun ok = run_example("flores_slider_crank.yaml",
+                                {"clearance_defaults.stiffness=1e7", "solver.output_interval=5e-3",
+                                 "solver.end_time=0.05"});
+  EXPECT_TRUE(ok.result.status.ok) << ok.result.status.message;
+}
+
 TEST(Events, ModeAgreesWithTheGapThroughGrazingContacts) {
   // Ten revolutions of the Flores example include grazing separations (δ̇ ~ −0.008 m/s) where a
   // restarted step once landed on the wrong side of the crossing and every later onset was lost.

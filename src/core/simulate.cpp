@@ -92,22 +92,17 @@ RunStatus expression_failure(const Model& model, const ExpressionError& e) {
   return {false, e.time(), "", e.what()};
 }
 
-/// A journal more than its own radius into the bearing wall went through it.
-bool journal_through_bearing(const Model& model, const Workspace& ws, RunStatus& st, double t) {
-  for (int k = 0; k < ws.nc; ++k) {
-    const Joint& j = model.joints[ws.clearance_joints[k]];
-    const auto& o = ws.clearance_out[k];
-    if (o.delta > j.clearance->journal_radius) {
-      std::ostringstream s;
-      s << "joint '" << j.name << "': journal driven through its bearing: penetration " << o.delta
-        << " m exceeds the journal radius " << j.clearance->journal_radius
-        << " m (delta_dot = " << o.delta_dot << " m/s, Fn = " << o.f_n
-        << " N); the contact is too soft for the load or the step too large";
-      st = {false, t, j.name, s.str()};
-      return true;
-    }
-  }
-  return false;
+/// Clearance joint k's journal more than its own radius into the bearing wall: it went through.
+/// ws holds the evaluation at t.
+RunStatus through_bearing(const Model& model, const Workspace& ws, int k, double t) {
+  const Joint& j = model.joints[ws.clearance_joints[k]];
+  const auto& o = ws.clearance_out[k];
+  std::ostringstream s;
+  s << "joint '" << j.name << "': journal driven through its bearing: penetration " << o.delta
+    << " m reached the journal radius " << j.clearance->journal_radius
+    << " m (delta_dot = " << o.delta_dot << " m/s, Fn = " << o.f_n
+    << " N); the contact is too soft for the load or the step too large";
+  return {false, t, j.name, s.str()};
 }
 
 /// The dense output of the step being reported, evaluated into the run's workspace.
@@ -159,8 +154,16 @@ void Simulator::hook_steps(Observer* observer) {
 
 void Simulator::problem_events(const double* y, double* g) const {
   event_functions(model_, ws_, y, g);
-  for (size_t p = 0; p < planes_.size(); ++p)
-    g[ws_.nc + p] = planes_[p].direction * (y[planes_[p].index] - planes_[p].value);
+  const int nc = ws_.nc, np = static_cast<int>(planes_.size());
+  for (int p = 0; p < np; ++p)
+    g[nc + p] = planes_[p].direction * (y[planes_[p].index] - planes_[p].value);
+  // Through the bearing: δ reaching the journal's radius, located like any event, so that a
+  // journal driven through its bearing and back between two outputs still stops the run.
+  for (int k = 0; k < nc; ++k) {
+    double delta, delta_dot;
+    clearance_gap(model_, ws_, k, y, delta, delta_dot);
+    g[nc + np + k] = delta - model_.joints[ws_.clearance_joints[k]].clearance->journal_radius;
+  }
 }
 
 Simulator::Simulator(const Model& model, Workspace& ws, std::vector<SectionPlane> planes)
@@ -168,7 +171,9 @@ Simulator::Simulator(const Model& model, Workspace& ws, std::vector<SectionPlane
   const SolverSettings& s = model.solver;
   OdeProblem problem;
   problem.n = ws.ny;
-  problem.n_events = ws.nc + static_cast<int>(planes_.size());
+  // Per clearance joint its contact function, then the section planes, then per clearance joint
+  // its through-the-bearing function (problem_events).
+  problem.n_events = 2 * ws.nc + static_cast<int>(planes_.size());
   problem.rhs = [this](double t, const double* yy, double* dy) {
     return evaluate(model_, ws_, t, yy, dy);
   };
@@ -190,7 +195,7 @@ Simulator::Simulator(const Model& model, Workspace& ws, std::vector<SectionPlane
     }
     near_singular_ = true;
     const Eigen::VectorXd before = yy;
-    const int n_events = ws_.nc + static_cast<int>(planes_.size());
+    const int n_events = static_cast<int>(g_event_.size());
     Eigen::VectorXd g_before(n_events), g_after(n_events);
     if (n_events > 0) problem_events(before.data(), g_before.data());
     if (!project_onto_constraints(model_, ws_, t, yy)) return false;
@@ -211,7 +216,7 @@ Simulator::Simulator(const Model& model, Workspace& ws, std::vector<SectionPlane
   y_.resize(ws.ny);
   y_try_.resize(ws.ny);
   ydot_.resize(ws.ny);
-  g_event_.resize(ws.nc + planes_.size());
+  g_event_.resize(problem.n_events);
 }
 
 Simulator::~Simulator() = default;
@@ -318,9 +323,7 @@ bool Simulator::advance_to(double t_target, Observer* observer) try {
     // The integrator located an event function rising through zero. A plane crossing is a
     // Poincaré section; a contact event flips every joint now on the far side (g_k ≥ 0), and at
     // round-off (δ = ±1e-17) the joint with the largest g_k. δ̇⁻ is read here.
-    event_functions(model_, ws_, y_.data(), g_event_.data());
-    for (size_t p = 0; p < planes_.size(); ++p)
-      g_event_[ws_.nc + p] = planes_[p].direction * (y_[planes_[p].index] - planes_[p].value);
+    problem_events(y_.data(), g_event_.data());
     // The function the integrator located, else the one furthest past zero. (Not the largest
     // g of all: a plane crossed long ago stays positive, in its own units, and would take every
     // contact event for a section.)
@@ -329,6 +332,12 @@ bool Simulator::advance_to(double t_target, Observer* observer) try {
       first = 0;
       for (int c = 1; c < g_event_.size(); ++c)
         if (g_event_[c] > g_event_[first]) first = c;
+    }
+    const int through_first = ws_.nc + static_cast<int>(planes_.size());
+    if (first >= through_first) {  // a journal through its bearing: the run stops here
+      evaluate(model_, ws_, adv.t, y_.data(), ydot_.data());
+      status_ = through_bearing(model_, ws_, first - through_first, adv.t);
+      return false;
     }
     if (first >= ws_.nc) {
       if (observer) {
@@ -568,7 +577,14 @@ RunResult simulate(const Model& model, Workspace& ws, Observer& observer,
     observer.output(t, y, ws);
     ++result.outputs;
     if (!finite) return false;
-    if (journal_through_bearing(model, ws, result.status, t)) return false;
+    // The start state (a --from state or a continued run): the event function sees a journal
+    // reach its radius during the run, not one that starts past it.
+    if (t == t0)
+      for (int k = 0; k < ws.nc; ++k)
+        if (ws.clearance_out[k].delta >= model.joints[ws.clearance_joints[k]].clearance->journal_radius) {
+          result.status = through_bearing(model, ws, k, t);
+          return false;
+        }
     observer.progress(t, s.end_time);
     return true;
   };
@@ -587,9 +603,9 @@ RunResult simulate(const Model& model, Workspace& ws, Observer& observer,
     if (!sim.advance_to(target, &observer)) {
       result.status = sim.status();
       y = sim.state();
-      // Interrupted between outputs: the last row is the state the run stopped in (the one
-      // final_state.json holds), off the output grid.
-      if (result.status.outcome == RunOutcome::interrupted && sim.time() > t_emitted) {
+      // Interrupted, or a journal through its bearing, between outputs: the last row is the
+      // state the run stopped in (the one final_state.json holds), off the output grid.
+      if (result.status.t == sim.time() && sim.time() > t_emitted) {
         const RunStatus stopped = result.status;
         if (emit(sim.time())) result.status = stopped;
       }
