@@ -229,6 +229,17 @@ TEST(Cli, NumericalFailureKeepsResultsAndExitsOne) {
   const auto j = nlohmann::json::parse(std::ifstream(dir / "summary.json"));
   EXPECT_FALSE(j["status"]["ok"].get<bool>());
   EXPECT_EQ(j["status"]["element"], "rod_slider");
+  // The folder is analysed like any stopped run (the stop was counted as a contact event, and
+  // analyze refused events.csv as cut), and its final state is refused as a start, saying why.
+  const Result an = run_lash("analyze " + dir.string() + " --no-lyapunov");
+  EXPECT_EQ(an.code, 1) << an.out;  // the run's own outcome
+  EXPECT_NE(an.out.find("analysis.json"), std::string::npos) << an.out;
+  EXPECT_EQ(an.out.find("cut or edited"), std::string::npos) << an.out;
+  const Result from = run_lash("run " + example() + " -q -o " + (dir / "again").string() +
+                               " --set clearance_defaults.stiffness=10 --from " +
+                               (dir / "final_state.json").string());
+  EXPECT_EQ(from.code, 2) << from.out;
+  EXPECT_NE(from.out.find("stopped with its journal through its bearing"), std::string::npos) << from.out;
   fs::remove_all(dir);
 }
 
@@ -1308,12 +1319,20 @@ TEST(Cli, AnHdf5FileThatCannotGrowKeepsItsChunksAndCloses) {
   // channels) and the third pass: exit 3 with summary.json, and a file that opens with the
   // chunks written before. A write HDF5 could not finish left a file it could not open, and
   // its exit handler crashed (139).
-  for (const auto& [blocks, chunks] : std::vector<std::pair<int, long>>{{1000, 0}, {10000, 2}}) {
+  // 6000 blocks and 5001 rows: the second, partial chunk is refused too (HDF5 allocates it
+  // whole; sized by its 905 rows, it was started, and the file could not be opened).
+  struct Case {
+    int blocks;
+    const char* end_time;
+    long chunks;
+  };
+  for (const Case& c : {Case{1000, "0.12", 0}, Case{10000, "0.12", 2}, Case{6000, "0.05", 1}}) {
+    const auto [blocks, end_time, chunks] = c;
     SCOPED_TRACE(blocks);
     const fs::path dir = temp_dir("h5_limit");
     const Result r = run_lash_raw("ulimit -f " + std::to_string(blocks) + "; " +
                                   std::string(LASH_BINARY) + " run " + example() + " -q -o " +
-                                  dir.string() + " --format hdf5 --set solver.end_time=0.12");
+                                  dir.string() + " --format hdf5 --set solver.end_time=" + end_time);
     EXPECT_EQ(r.code, 3) << r.out;
     EXPECT_NE(r.out.find("File too large"), std::string::npos) << r.out;
     const auto j = read_summary(dir);

@@ -199,6 +199,18 @@ TEST(Failure, AJournalThroughItsBearingBetweenOutputsStopsTheRun) {
     EXPECT_EQ(r.rec->time.back(), r.result.status.t) << integrator;
     EXPECT_NEAR(r.rec->data.at("rod_slider.delta").back(), 9.5e-3, 1e-9) << integrator;
     EXPECT_NEAR(r.result.final_state.t, r.result.status.t, 0.0) << integrator;
+    // It is not a contact event: integrator.events counts the rows of events.csv (lash analyze
+    // refused the folder: "1 events, summary.json counts 2").
+    EXPECT_EQ(r.result.stats.events + r.result.missed_events, static_cast<long>(r.rec->events.size()))
+        << integrator;
+    // An output 1e-13 s before the stop: no second row that the CSV would print at the same time.
+    char interval[32];
+    std::snprintf(interval, sizeof interval, "%.13g", r.result.status.t - 1e-13);
+    const SimRun near = run_example("flores_slider_crank.yaml",
+                                    {"clearance_defaults.stiffness=5e6", std::string("solver.output_interval=") + interval,
+                                     "solver.end_time=0.05", std::string("solver.integrator=") + integrator});
+    ASSERT_EQ(near.rec->time.size(), 2u) << integrator;
+    EXPECT_LT(near.result.status.t - near.rec->time.back(), 1e-12) << integrator;
   }
   // Stiffer (1e7): δ peaks at 6.6 mm, below the radius; the run completes.
   const SimRun ok = run_example("flores_slider_crank.yaml",

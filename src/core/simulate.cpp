@@ -224,6 +224,7 @@ Simulator::~Simulator() = default;
 IntegratorStats Simulator::stats() const {
   IntegratorStats s = integrator_->stats();
   s.projections = projections_;
+  s.events -= through_events_;  // contact events (events.csv's rows) and section crossings
   return s;
 }
 const char* Simulator::integrator_name() const { return integrator_->name(); }
@@ -337,6 +338,7 @@ bool Simulator::advance_to(double t_target, Observer* observer) try {
     if (first >= through_first) {  // a journal through its bearing: the run stops here
       evaluate(model_, ws_, adv.t, y_.data(), ydot_.data());
       status_ = through_bearing(model_, ws_, first - through_first, adv.t);
+      ++through_events_;
       return false;
     }
     if (first >= ws_.nc) {
@@ -470,10 +472,12 @@ std::string resume_problem(const Model& model, Workspace& ws, const State& state
     const Joint& j = model.joints[ws.clearance_joints[c]];
     double delta, delta_dot;
     clearance_gap(model, ws, c, state.y.data(), delta, delta_dot);
-    if (delta > j.clearance->journal_radius) {
+    if (delta >= j.clearance->journal_radius) {
       s << "joint '" << j.name << "': the journal lies " << delta << " m into its bearing's wall, "
-        << "more than its own radius " << j.clearance->journal_radius
-        << " m: the state does not fit this joint (written with another clearance or geometry?)";
+        << "as deep as its own radius " << j.clearance->journal_radius
+        << " m or deeper: the state does not fit this joint (the final state of a run stopped "
+           "with its journal through its bearing, or one written with another clearance or "
+           "geometry)";
       return s.str();
     }
   }
@@ -604,8 +608,10 @@ RunResult simulate(const Model& model, Workspace& ws, Observer& observer,
       result.status = sim.status();
       y = sim.state();
       // Interrupted, or a journal through its bearing, between outputs: the last row is the
-      // state the run stopped in (the one final_state.json holds), off the output grid.
-      if (result.status.t == sim.time() && sim.time() > t_emitted) {
+      // state the run stopped in (the one final_state.json holds), off the output grid; not
+      // within 1e-9 of the time of the row before, which the CSV's 9 digits would print the same.
+      if (result.status.t == sim.time() &&
+          sim.time() - t_emitted > 1e-9 * std::max(std::abs(sim.time()), 1e-300)) {
         const RunStatus stopped = result.status;
         if (emit(sim.time())) result.status = stopped;
       }

@@ -161,6 +161,7 @@ class Simulator {
   Workspace& ws_;
   bool near_singular_ = false;  ///< the last step ended near a singular position
   long projections_ = 0;        ///< states moved onto the constraints there
+  long through_events_ = 0;     ///< located journals through their bearings (not contact events)
   /// The event functions of the integrated problem: the clearance joints', then the planes'.
   void problem_events(const double* y, double* g) const;
   std::vector<SectionPlane> planes_;

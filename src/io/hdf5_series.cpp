@@ -120,9 +120,11 @@ void Hdf5Series::write_buffered() {
   if (n == 0 || !is_open()) return;
   // Room for the chunk first. A write HDF5 starts and cannot finish leaves a file it can no
   // longer open (see abandon), so a chunk that would pass the file-size limit or fill the disk
-  // is not started: the file closes as its last flush left it. The need: the chunk's doubles,
-  // a twentieth more for the chunk index and headers, and 64 KiB.
-  const double need = 1.05 * 8.0 * static_cast<double>(n * columns_.size()) + 65536.0;
+  // is not started: the file closes as its last flush left it. The need: a whole chunk's
+  // doubles (HDF5 allocates the last, partial chunk whole: sized by its rows, the check let a
+  // last chunk start that could not finish), a twentieth more for the chunk index and headers,
+  // and 64 KiB.
+  const double need = 1.05 * 8.0 * static_cast<double>(kChunkRows * columns_.size()) + 65536.0;
   rlimit limit{};
   if (::getrlimit(RLIMIT_FSIZE, &limit) == 0 && limit.rlim_cur != RLIM_INFINITY &&
       static_cast<double>(h_->flushed_size) + need > static_cast<double>(limit.rlim_cur))
