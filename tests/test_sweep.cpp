@@ -462,6 +462,36 @@ TEST(SweepCli, CheckOfAStudyFileChecksItAsSweepDoes) {
   EXPECT_NE(r.out.find("warning: runs 1, 3: " + some_bad.string() + ":7:3: joint 'rod_slider': clearance must be >= 0"),
             std::string::npos) << r.out;
   EXPECT_NE(r.out.find("4 runs of 1 model; 2 of them would be recorded as errors"), std::string::npos) << r.out;
+  // A continuation chain: a run that would be an error (a transient of 0.03 s in 0.01 s) makes
+  // the run continuing it one too.
+  const fs::path chain = write_study(
+      dir, "set: {solver.end_time: 0.01}\ntransient: {periods: 1}\ncontinuation: up\n"
+           "parameters:\n  drivers.crank.speed_rpm: {values: [8000, 2000, 8000]}\n", "chain.yaml");
+  r = lash_cmd("check " + chain.string());
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("warning: run 1: the transient (0.03 s) is not shorter than the run (0.01 s)"),
+            std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("warning: run 2: it continues run 1, which would be an error"), std::string::npos) << r.out;
+  // 2 400 runs: 2 000 checked, among them runs of every level. Checked one run in two or more,
+  // it saw the first level(s) of the 4-level parameter only (with 1000 rpm first, "every one
+  // ... would be an error"; listed last, "ok").
+  const fs::path many = write_study(
+      dir, "set: {solver.end_time: 0.02}\ntransient: {periods: 1}\nparameters:\n"
+           "  joints.rod_slider.restitution: {from: 0.5, to: 0.9, count: 600}\n"
+           "  drivers.crank.speed_rpm: {values: [4000, 5000, 6000, 1000]}\n", "many.yaml");
+  r = lash_cmd("check " + many.string());
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("2000 of its 2400 runs"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("the transient (0.06 s) is not shorter than the run (0.02 s)"), std::string::npos) << r.out;
+  // A value bad in the first 100 runs (the outer parameter's first level) is those runs' error;
+  // the study was refused ("in run 0 ... nothing was run").
+  const fs::path outer = write_study(
+      dir, "set: {solver.end_time: 0.024}\ntransient: {periods: 1}\nparameters:\n"
+           "  joints.rod_slider.restitution: {values: [0, 0.5, 1]}\n"
+           "  drivers.crank.speed_rpm: {from: 3000, to: 5000, count: 100}\n", "outer.yaml");
+  r = lash_cmd("check " + outer.string());
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("300 runs of 1 model; 100 of them would be recorded as errors"), std::string::npos) << r.out;
   const fs::path bad = write_study(
       dir, "set: {solver.rtol: 5}\nparameters:\n  drivers.crank.sped_rpm: {values: [3000]}\n", "bad.yaml");
   r = lash_cmd("check " + bad.string());

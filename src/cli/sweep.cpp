@@ -10,6 +10,9 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <map>
+#include <random>
+#include <set>
 #include <iostream>
 
 #include "io/diagnostics.hpp"
@@ -93,16 +96,48 @@ int check_study(const std::string& path) {
   try {
     const StudySpec spec = load_study_file(path);
     const auto runs = study_runs(spec);
-    // Every run's model and transient, as the sweep would start it (a few milliseconds each);
-    // past kCheckedRuns, runs spread evenly over the study.
-    constexpr std::size_t kCheckedRuns = 5000;
-    const std::size_t stride = (runs.size() + kCheckedRuns - 1) / kCheckedRuns;
+    // Every run's model and transient, as the sweep would start it (a few milliseconds each).
+    // Past kCheckedRuns: one run drawn at random among those of every level of every listed
+    // parameter, and runs drawn at random up to kCheckedRuns (a fixed seed), in index order; at
+    // most kCheckSeconds in all. (Every level's first run took, for a parameter of 5000 levels
+    // crossed with one of 4, the 5000 runs of the other's first level only.)
+    constexpr std::size_t kCheckedRuns = 2000;
+    constexpr double kCheckSeconds = 30.0;
+    std::vector<std::size_t> pick;
+    if (runs.size() <= kCheckedRuns) {
+      for (std::size_t i = 0; i < runs.size(); ++i) pick.push_back(i);
+    } else {
+      std::mt19937_64 draw(20261127u);
+      // Reservoir sampling: each level keeps its k-th run with probability 1/k.
+      std::map<std::pair<std::size_t, std::string>, std::pair<std::size_t, std::size_t>> level;
+      for (std::size_t i = 0; i < runs.size(); ++i)
+        for (std::size_t j = 0; j < spec.parameters.size(); ++j) {
+          if (spec.parameters[j].sampled) continue;
+          auto& [seen, run] = level[{j, runs[i].values[j]}];
+          if (draw() % ++seen == 0) run = i;
+        }
+      std::set<std::size_t> chosen;
+      for (const auto& [key, pick_one] : level) chosen.insert(pick_one.second);
+      while (chosen.size() < kCheckedRuns) chosen.insert(static_cast<std::size_t>(draw() % runs.size()));
+      pick.assign(chosen.begin(), chosen.end());
+    }
+    const auto start = std::chrono::steady_clock::now();
     std::size_t checked = 0;
+    bool timed_out = false;
     std::vector<std::pair<std::string, std::vector<int>>> errors;  // message → runs, in order
-    for (std::size_t i = 0; i < runs.size(); i += stride) {
+    std::set<int> failing;                                         // their indices
+    for (std::size_t i : pick) {
+      if (std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() > kCheckSeconds) {
+        timed_out = true;
+        break;
+      }
       ++checked;
-      const std::string e = study_run_error(spec, runs[i]);
+      std::string e = study_run_error(spec, runs[i]);
+      // A continued run starts from the state the run before it ends in.
+      if (e.empty() && runs[i].previous >= 0 && failing.count(runs[i].previous))
+        e = "it continues run " + std::to_string(runs[i].previous) + ", which would be an error";
       if (e.empty()) continue;
+      failing.insert(runs[i].index);
       auto it = std::find_if(errors.begin(), errors.end(), [&](const auto& p) { return p.first == e; });
       if (it == errors.end()) it = errors.insert(errors.end(), {e, {}});
       it->second.push_back(runs[i].index);
@@ -110,9 +145,11 @@ int check_study(const std::string& path) {
     std::size_t bad = 0;
     for (const auto& [e, list] : errors) bad += list.size();
     const std::string of =
-        checked == runs.size() ? std::to_string(runs.size()) + " runs"
-                               : std::to_string(checked) + " of its " + std::to_string(runs.size()) +
-                                     " runs (one in " + std::to_string(stride) + ")";
+        checked == runs.size()
+            ? std::to_string(runs.size()) + " runs"
+            : std::to_string(checked) + " of its " + std::to_string(runs.size()) + " runs (" +
+                  (timed_out ? "those checked in " + std::to_string(static_cast<int>(kCheckSeconds)) + " s"
+                             : std::string("every level, and runs drawn at random")) + ")";
     const std::string models =
         std::to_string(spec.model_texts.size()) + " model" + (spec.model_texts.size() == 1 ? "" : "s");
     if (bad == 0) {
@@ -136,7 +173,8 @@ int check_study(const std::string& path) {
       return kExitBadInput;
     }
     std::cout << path << ": ok: study '" << spec.name << "', " << of << " of " << models << "; "
-              << bad << " of them would be recorded as errors (above)\n";
+              << bad << " of " << (checked == runs.size() ? "them" : "those checked")
+              << " would be recorded as errors (above)\n";
     return kExitOk;
   } catch (const ModelError& e) {
     return study_error(e);

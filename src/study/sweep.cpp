@@ -1,6 +1,8 @@
 // Study files, their runs and one run's record (sweep.hpp; format: docs/studies.md).
 #include "study/sweep.hpp"
 
+#include <fmt/core.h>
+
 #include <cctype>
 #include <yaml-cpp/yaml.h>
 
@@ -515,17 +517,6 @@ StudySpec load_study_text(const std::string& text, const std::string& file,
     }
     return loaded[i].has_value();
   };
-  size_t first_ok = runs.size();
-  for (size_t i = 0; i < runs.size() && i < 100 && first_ok == runs.size(); ++i)
-    if (load(i)) first_ok = i;
-  if (first_ok == runs.size()) {
-    Diagnostics list;
-    for (auto d : load_errors.begin()->second) {
-      d.message += " (in run " + std::to_string(runs[load_errors.begin()->first].index) + ")";
-      list.push_back(d);
-    }
-    throw ModelError(list);
-  }
   // The runs of each level: (parameter, level) → the first few runs that have it.
   constexpr size_t kTriesPerCase = 20, kMaxProbes = 400;
   std::map<std::pair<size_t, std::string>, std::vector<size_t>> level_runs;
@@ -535,6 +526,22 @@ StudySpec load_study_text(const std::string& text, const std::string& file,
       auto& v = level_runs[{j, runs[i].values[j]}];
       if (v.size() < (spec.parameters[j].case_overrides.empty() ? 1 : kTriesPerCase)) v.push_back(i);
     }
+  // A model that loads: among the first 100 runs, then the first run of each level (a value
+  // bad in the first 100 runs, e.g. the outer parameter's first level, is those runs' error).
+  size_t first_ok = runs.size();
+  for (size_t i = 0; i < runs.size() && i < 100 && first_ok == runs.size(); ++i)
+    if (load(i)) first_ok = i;
+  for (auto it = level_runs.begin(); it != level_runs.end() && first_ok == runs.size() &&
+                                     loaded.size() < kMaxProbes; ++it)
+    if (load(it->second.front())) first_ok = it->second.front();
+  if (first_ok == runs.size()) {
+    Diagnostics list;
+    for (auto d : load_errors.begin()->second) {
+      d.message += " (in run " + std::to_string(runs[load_errors.begin()->first].index) + ")";
+      list.push_back(d);
+    }
+    throw ModelError(list);
+  }
   std::set<std::string> reported;  // path problems, once each
   auto report_paths = [&](size_t i) {
     // A path the model lacks; a value refused in this run only is that run's error (below).
@@ -825,9 +832,8 @@ double transient_end(const StudySpec& spec, const Model& model, const Driver* dr
   const double t_transient =
       t_begin + (spec.discard_time >= 0 ? spec.discard_time : period > 0 ? spec.discard_periods * period : 0.0);
   if (t_transient >= model.solver.end_time)
-    throw std::invalid_argument("the transient (" + number_text(t_transient - t_begin) +
-                                " s) is not shorter than the run (" +
-                                number_text(model.solver.end_time - t_begin) + " s)");
+    throw std::invalid_argument(fmt::format("the transient ({:.6g} s) is not shorter than the run ({:.6g} s)",
+                                            t_transient - t_begin, model.solver.end_time - t_begin));
   return t_transient;
 }
 
@@ -842,7 +848,8 @@ std::string trimmed(std::string message) {
 std::string study_run_error(const StudySpec& spec, const StudyRun& run) {
   try {
     const LoadedModel lm = load_model_text(spec.model_texts.at(run.model), run.model, run.overrides);
-    if (run.previous < 0) transient_end(spec, lm.model, period_driver(lm.model, ""), 0.0);
+    // A continued run lasts end_time from where it starts: its transient is checked the same.
+    transient_end(spec, lm.model, period_driver(lm.model, ""), 0.0);
     return "";
   } catch (const ModelError& e) {
     return trimmed(ModelError(study_diagnostics(e.diagnostics(), spec)).what());

@@ -114,8 +114,9 @@ RunRecord record_from_json(const nlohmann::json& j);
 
 /// What the sweep would record as the run's error before simulating it: its model refused (a
 /// value the study gives, pointed at the study's key) or its transient not shorter than the run;
-/// "" when it would start. A continued run's transient is not checked (it starts where the run
-/// before it ends). `lash check` of a study.
+/// "" when it would start. A continued run is checked as if it started at t = 0 (it runs for
+/// end_time from where the run before it ends); whether that run ends well is not known here.
+/// `lash check` of a study.
 std::string study_run_error(const StudySpec& spec, const StudyRun& run);
 
 /// Runs one point of the study. Never throws for a bad parameter combination or a failing run:
