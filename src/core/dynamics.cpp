@@ -399,11 +399,13 @@ Workspace::Workspace(const Model& model) {
   phi_q = Eigen::MatrixXd::Zero(m, nq);
 }
 
-void event_functions(const Model& model, const Workspace& ws, const double* y, double* g) {
+void event_functions(const Model& model, const Workspace& ws, const double* y, double* g,
+                     double* through) {
   for (int k = 0; k < ws.nc; ++k) {
     double delta, delta_dot;
     clearance_gap(model, ws, k, y, delta, delta_dot);
     g[k] = ws.contact[k].in_contact ? -delta : delta;
+    if (through) through[k] = delta - model.joints[ws.clearance_joints[k]].clearance->journal_radius;
   }
 }
 

@@ -147,8 +147,11 @@ void update_kin(Workspace& ws, const double* y);
 bool evaluate(const Model& model, Workspace& ws, double t, const double* y, double* ydot);
 
 /// Event functions, one per clearance joint: g_k = s_k δ_k with s_k = +1 in free flight and −1 in
-/// contact, so every event is g rising through zero (onset: δ ↑ 0; separation: δ ↓ 0).
-void event_functions(const Model& model, const Workspace& ws, const double* y, double* g);
+/// contact, so every event is g rising through zero (onset: δ ↑ 0; separation: δ ↓ 0); and,
+/// unless `through` is null, through_k = δ_k − R_k (R_k the journal's radius), which rises
+/// through zero where a journal goes through its bearing.
+void event_functions(const Model& model, const Workspace& ws, const double* y, double* g,
+                     double* through);
 
 /// Constraint residual Φ(q, t) and max |Φ| (drift monitor).
 double constraint_residual(const Model& model, Workspace& ws, double t, const double* y);

@@ -153,17 +153,13 @@ void Simulator::hook_steps(Observer* observer) {
 }
 
 void Simulator::problem_events(const double* y, double* g) const {
-  event_functions(model_, ws_, y, g);
+  // Contact, then the planes, then through the bearing: δ reaching the journal's radius,
+  // located like any event, so that a journal driven through its bearing and back between two
+  // outputs still stops the run.
   const int nc = ws_.nc, np = static_cast<int>(planes_.size());
+  event_functions(model_, ws_, y, g, g + nc + np);
   for (int p = 0; p < np; ++p)
     g[nc + p] = planes_[p].direction * (y[planes_[p].index] - planes_[p].value);
-  // Through the bearing: δ reaching the journal's radius, located like any event, so that a
-  // journal driven through its bearing and back between two outputs still stops the run.
-  for (int k = 0; k < nc; ++k) {
-    double delta, delta_dot;
-    clearance_gap(model_, ws_, k, y, delta, delta_dot);
-    g[nc + np + k] = delta - model_.joints[ws_.clearance_joints[k]].clearance->journal_radius;
-  }
 }
 
 Simulator::Simulator(const Model& model, Workspace& ws, std::vector<SectionPlane> planes)
