@@ -460,10 +460,7 @@ bool evaluate(const Model& model, Workspace& ws, double t, const double* y, doub
       ws.input_power += ws.lambda[r] * (rate - ws.phi_dot[r]);
     }
     ws.stabilization_power = ws.lambda.dot(ws.phi_dot);
-    // Over the rows enforced: a redundant row left out may differ by a loop's small mismatch.
-    double violation = 0.0;
-    for (int r : ws.solver->active) violation = std::max(violation, std::abs(ws.phi[r]));
-    ws.constraint_violation = violation;
+    ws.constraint_violation = ws.phi.cwiseAbs().maxCoeff();
   } else {
     // No constraints: M q̈ = g, block by block (a flexible link's block through its Cholesky
     // factor, computed once).
@@ -601,51 +598,12 @@ Eigen::VectorXd initial_state(const Model& model, Workspace& ws) {
   // closed by corrections of every coordinate, which bend the link.
   const bool flexible = std::any_of(model.bodies.begin(), model.bodies.end(),
                                     [](const Body& b) { return b.flexible(); });
-  //
-  // Joint equations redundant at the given poses (a double parallelogram's third crank) are left
-  // out: their Jacobian rows do not depend on where the markers are, so a loop that closes only
-  // approximately (a marker 1e-11 m off) is still redundant here, while all equations together
-  // are then satisfied only at isolated positions, which Newton's method went to (60° away). If
-  // an equation left out is not redundant at the assembled position (a mechanism posed at a
-  // singular position, where Φ_q loses rank at that instant only), or misses by more than
-  // kStateTolerancePosition, all are enforced again, as before.
-  std::vector<bool> enforce(rows, true);
-  update_kin(ws, y.data());
-  build_constraints(model, ws, 0.0, y.data(), ideal, phi, phi_q, nullptr, nullptr);
-  {
-    const std::vector<bool> independent = independent_rows(phi_q.topRows(ws.m));
-    for (int i = 0; i < ws.m; ++i) enforce[i] = independent[i];
-  }
-  auto mask = [&](Eigen::VectorXd& v, Eigen::MatrixXd* a) {
-    for (int i = 0; i < rows; ++i)
-      if (!enforce[i]) {
-        v[i] = 0.0;
-        if (a) a->row(i).setZero();
-      }
-  };
   double residual = 0.0;
-  for (int it = 0, retake = 0; it < 130; ++it) {
+  for (int it = 0; it < 130; ++it) {
     update_kin(ws, y.data());
     build_constraints(model, ws, 0.0, y.data(), ideal, phi, phi_q, nullptr, nullptr);
-    const Eigen::VectorXd all = phi;
-    mask(phi, &phi_q);
     residual = phi.cwiseAbs().maxCoeff();
-    if (residual < 1e-13) {
-      const double left_out = all.cwiseAbs().maxCoeff();
-      if (!(left_out >= 1e-10) || retake++ > 0) break;
-      // An equation left out is not satisfied: keep it out only if it is redundant here too,
-      // and only by as much as a state may miss a joint (a link that cannot reach its second
-      // pivot has that pivot's equation redundant at its pose, and must fail to assemble).
-      Eigen::MatrixXd pq(ws.m, nq);
-      Eigen::VectorXd p(ws.m);
-      build_constraints(model, ws, 0.0, y.data(), false, p, pq, nullptr, nullptr);
-      const std::vector<bool> keep = jacobian_pattern(model, ws, 0.0, y.data(), pq).keep;
-      bool redundant = true;
-      for (int i = 0; i < ws.m; ++i) redundant = redundant && (enforce[i] || !keep[i]);
-      if (redundant && left_out <= kStateTolerancePosition) break;
-      std::fill(enforce.begin(), enforce.end(), true);
-      continue;
-    }
+    if (residual < 1e-13) break;
     if (flexible && it < 30) {
       Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(
           phi_q * rigid_motion_basis(model, ws, y.data()));
@@ -678,7 +636,6 @@ Eigen::VectorXd initial_state(const Model& model, Workspace& ws) {
   auto correct_velocities = [&](const Eigen::MatrixXd& t) {
     update_kin(ws, y.data());
     build_constraints(model, ws, 0.0, y.data(), ideal, phi, phi_q, &phi_dot, nullptr);
-    mask(phi_dot, &phi_q);
     const double before = phi_dot.size() == 0 ? 0.0 : phi_dot.cwiseAbs().maxCoeff();
     const Eigen::LLT<Eigen::MatrixXd> chol(t.transpose() * mass_matrix(ws) * t);
     const Eigen::MatrixXd scaled =
@@ -687,7 +644,6 @@ Eigen::VectorXd initial_state(const Model& model, Workspace& ws) {
     y.segment(nq, nq) -= t * chol.matrixU().solve(cod.solve(phi_dot));
     update_kin(ws, y.data());
     build_constraints(model, ws, 0.0, y.data(), ideal, phi, phi_q, &phi_dot, nullptr);
-    mask(phi_dot, nullptr);
     const double after = phi_dot.size() == 0 ? 0.0 : phi_dot.cwiseAbs().maxCoeff();
     return after / std::max(before, 1e-300);
   };
@@ -700,26 +656,6 @@ Eigen::VectorXd initial_state(const Model& model, Workspace& ws) {
 
   if (const std::string why = constraint_problem(model, ws, 0.0, y, false); !why.empty())
     throw std::runtime_error(why);
-  // A redundant equation left out that the assembled position does not satisfy: by how much.
-  update_kin(ws, y.data());
-  Eigen::VectorXd p(ws.m);
-  Eigen::MatrixXd pq(ws.m, nq);
-  build_constraints(model, ws, 0.0, y.data(), false, p, pq, nullptr, nullptr);
-  for (size_t ji = 0; ji < model.joints.size(); ++ji) {
-    const Joint& j = model.joints[ji];
-    if (!j.is_constraint()) continue;
-    double worst = 0.0;
-    for (int r = ws.row_of_joint[ji], end = r + kind_of(j).rows(model, j); r < end; ++r)
-      if (!enforce[r]) worst = std::max(worst, std::abs(p[r]));
-    if (worst >= 1e-10) {
-      std::ostringstream s;
-      s << "joint '" << j.name << "': its redundant equation is not satisfied at the assembled "
-        << "position (residual " << worst << "): the joints close the loop only approximately, "
-        << "and the motion is computed without it";
-      ws.warnings.push_back(s.str());
-    }
-  }
-  update_kin(ws, y.data());
   return y;
 }
 
