@@ -255,6 +255,27 @@ TEST(Redundancy, RedundantDoubleParallelogramMovesAsTheNonRedundantOne) {
   for (double b : bal) EXPECT_NEAR(b, bal.front(), 1e-6);
 }
 
+TEST(Redundancy, AssemblyThatTurnsABodyFarFromItsPoseIsSaid) {
+  // The third crank's ground pivot 1e-11 m off: all twelve equations hold only with the cranks
+  // vertical, and assembly goes there, 60° from the poses given. It did so silently.
+  std::string yaml = parallelogram_yaml(3, 1.0);
+  const std::string g2 = "G2: [2, 0]";
+  ASSERT_NE(yaml.find(g2), std::string::npos) << yaml;
+  yaml.replace(yaml.find(g2), g2.size(), "G2: [2.00000000001, 0]");
+  const Model m = load_model_text(yaml, "p3.yaml").model;
+  Workspace ws(m);
+  initial_state(m, ws);
+  ASSERT_EQ(ws.warnings.size(), 2u);
+  EXPECT_EQ(ws.warnings[1].rfind("body 'crank_", 0), 0u) << ws.warnings[1];
+  EXPECT_NE(ws.warnings[1].find("assembly turned it 60 degrees from its given angle"), std::string::npos)
+      << ws.warnings[1];
+  // The exact loop starts where posed: no such warning.
+  const Model exact = load_model_text(parallelogram_yaml(3, 1.0), "p3.yaml").model;
+  Workspace we(exact);
+  initial_state(exact, we);
+  EXPECT_EQ(we.warnings.size(), 1u);
+}
+
 TEST(Singular, ParallelogramPassesItsInLinePositionsWithBothIntegrators) {
   // Unit links, released at rest at 60°: the cranks swing through the in-line positions 0 and
   // 180°, where Φ_q loses rank (the parallelogram meets its antiparallelogram branch), twice per

@@ -656,6 +656,29 @@ Eigen::VectorXd initial_state(const Model& model, Workspace& ws) {
 
   if (const std::string why = constraint_problem(model, ws, 0.0, y, false); !why.empty())
     throw std::runtime_error(why);
+  // A rigid body that assembly turned far from its given angle: said (after the solver's
+  // warnings, which it sets anew). A loop that closes only approximately (a redundant joint's
+  // pivot 1e-11 m off) is closed exactly only at isolated positions, and Newton's method goes
+  // there: a double parallelogram posed at −30° started at −90°, silently.
+  int turned = -1;
+  double most = kAssemblyTurnWarning;
+  Eigen::VectorXd given = Eigen::VectorXd::Zero(ws.ny);
+  for (int b = 0; b < ws.nb; ++b) {
+    const Body& body = model.bodies[b];
+    if (body.type != BodyType::rigid) continue;
+    kind_of(body).initial(body, given.data() + ws.blocks[b].offset, nullptr);
+    const int k = ws.blocks[b].offset + 2;
+    if (std::abs(y[k] - given[k]) > most) most = std::abs(y[k] - given[k]), turned = b;
+  }
+  if (turned >= 0) {
+    std::ostringstream s;
+    s.precision(3);
+    s << "body '" << model.bodies[turned].name << "': assembly turned it "
+      << most * 180.0 / M_PI << " degrees from its given angle to satisfy every joint and "
+      << "driver; check its markers and pose (a redundant joint whose markers close the loop "
+      << "only approximately is satisfied only at isolated positions)";
+    ws.warnings.push_back(s.str());
+  }
   return y;
 }
 

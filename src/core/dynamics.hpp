@@ -166,6 +166,8 @@ Eigen::VectorXd initial_state(const Model& model, Workspace& ws);
 /// Largest constraint residuals a state to continue from may have: |Φ| (m or rad) and |Φ̇|
 /// (m/s or rad/s). A run's own states hold the Baumgarte-bounded drift, orders below these.
 inline constexpr double kStateTolerancePosition = 1e-6;
+/// A rigid body turned by assembly more than this from its given angle (rad, 10°) is warned of.
+inline constexpr double kAssemblyTurnWarning = 0.17453292519943295;
 inline constexpr double kStateToleranceVelocity = 1e-4;
 
 /// Why y cannot be run at time t: a redundant driver or, with check_residual, constraint
