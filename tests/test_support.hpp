@@ -2,6 +2,8 @@
 // Helpers shared by the tests: load a model from text, run it, keep channels in memory.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -77,6 +79,52 @@ inline double max_abs_diff(const std::vector<double>& a, const std::vector<doubl
   double m = 0;
   for (size_t i = 0; i < std::min({a.size(), b.size(), n}); ++i) m = std::max(m, std::abs(a[i] - b[i]));
   return m;
+}
+
+/// A parallelogram linkage under gravity: `cranks` unit cranks (mass m, inertia I about the
+/// centre) pivoted on the ground at x = 0, 1, 2, … and pinned to one rigid coupler, released at
+/// rest at −30° (it swings between −30° and −150°, clear of the in-line positions 0 and 180°).
+/// With three cranks one equation is redundant. `first_crank_scale` multiplies the
+/// first crank's mass and inertia: every crank has the same angle, speed and height, so two
+/// cranks with the first doubled move exactly as three. `world_turn` (rad) turns the whole
+/// model, gravity included, about the origin: the same motion seen in turned axes.
+inline std::string parallelogram_yaml(int cranks, double first_crank_scale, double th = -M_PI / 6,
+                                      double world_turn = 0.0) {
+  const double c = std::cos(th), s = std::sin(th), m = 1.0, inertia = 1.0 / 12;
+  const double cw = std::cos(world_turn), sw = std::sin(world_turn);
+  // Turned: every number to 17 digits (a loop closed to 1e-6 m locks a redundant linkage).
+  auto num = [&](double v) {
+    if (world_turn == 0.0) return std::to_string(v);
+    char b[32];
+    std::snprintf(b, sizeof b, "%.17g", v);
+    return std::string(b);
+  };
+  auto point = [&](double x, double y) {
+    return "[" + num(cw * x - sw * y) + ", " + num(sw * x + cw * y) + "]";
+  };
+  std::string y = "gravity: " + point(0, -9.81) + "\nground:\n  markers: {";
+  for (int i = 0; i < cranks; ++i)
+    y += (i ? ", G" : "G") + std::to_string(i) + ": " +
+         (world_turn == 0.0 ? "[" + std::to_string(i) + ", 0]" : point(i, 0));
+  y += "}\nbodies:\n";
+  for (int i = 0; i < cranks; ++i) {
+    const double k = i == 0 ? first_crank_scale : 1.0;
+    y += "  crank_" + std::to_string(i) + ": {mass: " + std::to_string(k * m) +
+         ", inertia: " + std::to_string(k * inertia) + ", position: " + point(i + 0.5 * c, 0.5 * s) +
+         ", angle: " + num(th + world_turn) + ", markers: {O: [-0.5, 0], A: [0.5, 0]}}\n";
+  }
+  const double half = 0.5 * (cranks - 1);
+  y += "  coupler: {mass: 2, inertia: 0.5, position: " + point(half + c, s) +
+       ", angle: " + num(world_turn) + ", markers: {";
+  for (int i = 0; i < cranks; ++i) y += (i ? ", P" : "P") + std::to_string(i) + ": [" + std::to_string(i - half) + ", 0]";
+  y += "}}\njoints:\n";
+  for (int i = 0; i < cranks; ++i) {
+    const std::string n = std::to_string(i);
+    y += "  pivot_" + n + ": {type: revolute, journal: crank_" + n + ".O, bearing: ground.G" + n + "}\n";
+    y += "  coupler_" + n + ": {type: revolute, journal: crank_" + n + ".A, bearing: coupler.P" + n + "}\n";
+  }
+  y += "solver: {end_time: 2, output_interval: 0.01, rtol: 1.0e-9, atol: 1.0e-12}\n";
+  return y;
 }
 
 }  // namespace lash::test

@@ -91,8 +91,13 @@ static void build_solver(const Model& model, Workspace& ws, const Eigen::MatrixX
   // Redundant rows: dropped, named in a warning (a driver's: refused).
   const std::vector<bool> keep =
       pattern.keep.empty() ? independent_rows(phi_q) : pattern.keep;
-  for (int i = 0; i < m; ++i)
-    if (keep[i]) s->active.push_back(i);
+  for (int i = 0; i < m; ++i) (keep[i] ? s->active : s->dropped).push_back(i);
+  if (!s->dropped.empty()) {
+    s->null_basis.resize(m, s->dropped.size());
+    s->null_gram = Eigen::LLT<Eigen::MatrixXd>(static_cast<Eigen::Index>(s->dropped.size()));
+    s->null_work.resize(nq + m - s->dropped.size());
+    s->null_dot.resize(s->dropped.size());
+  }
   ws.warnings.clear();
   if (static_cast<int>(s->active.size()) < m) {
     // Which kept rows span each dropped one: the least-squares combination of the kept rows.
@@ -130,13 +135,16 @@ static void build_solver(const Model& model, Workspace& ws, const Eigen::MatrixX
           throw std::runtime_error(what + ": its equation is redundant with " + names +
                                    ": the motion it prescribes is already fixed; remove the "
                                    "driver or one of those joints");
-        ws.warnings.push_back(what + ": " + std::to_string(dropped) + " of its " +
-                              std::to_string(end - i) + " equations " +
-                              (dropped == 1 ? "is" : "are") + " redundant with " + names +
-                              "; the motion is computed without " +
-                              (dropped == 1 ? "it" : "them") +
-                              ", and the reaction reported for this joint is that of its other "
-                              "equations (0 on the dropped ones)");
+        const int total = end - i, others = total - dropped;
+        const std::string which =
+            others == 0 ? (total == 1 ? "its equation is" : "all " + std::to_string(total) + " of its equations are")
+                        : std::to_string(dropped) + " of its " + std::to_string(total) +
+                              (dropped == 1 ? " equations is" : " equations are");
+        ws.warnings.push_back(what + ": " + which + " redundant with " + names +
+                              "; the motion is computed without " + (dropped == 1 ? "it" : "them") +
+                              ", and the reactions reported are the smallest that hold the "
+                              "mechanism (least squares over all joint equations: redundant "
+                              "reactions are not unique)");
       }
       i = end;
     }
@@ -499,7 +507,35 @@ bool solve_constraints(Workspace& ws) {
   s.ldlt.solve(s.x);
   for (int k = 0; k < nq; ++k) ws.qdd[k] = s.x[s.pos[k]];
   for (int a = 0; a < ma; ++a) ws.lambda[s.active[a]] = -s.x[s.pos[nq + a]];
+  for (int r : s.dropped) ws.lambda[r] = 0.0;  // smallest_multipliers may have set them
   return true;
+}
+
+void smallest_multipliers(Workspace& ws) {
+  ConstraintSolver& s = *ws.solver;
+  if (s.dropped.empty()) return;
+  const int nq = ws.nq, ma = static_cast<int>(s.active.size());
+  // Redundant rows. The multipliers of a redundant set are not unique: any self-equilibrated
+  // set (a vector of Φ_q's left null space) can be added. Those of the kept rows alone (0 on the
+  // dropped ones) depend on which rows were dropped, i.e. on the model's order and the world's
+  // orientation. Reported instead: the smallest multipliers with the same generalised constraint
+  // force Φ_qᵀλ, λ − N (NᵀN)⁻¹ Nᵀ λ with N a basis of the left null space: per dropped row r,
+  // e_r − Σ_a c_a e_(kept a), where Φ_rᵀ = Σ_a c_a Φ_aᵀ; c from the factorisation at hand (the
+  // augmented system with right-hand side [Φ_rᵀ; 0] has the solution [O(ε); c]).
+  const int nd = static_cast<int>(s.dropped.size());
+  for (int j = 0; j < nd; ++j) {
+    const int r = s.dropped[j];
+    s.null_work.setZero();
+    for (int k = 0; k < nq; ++k) s.null_work[s.pos[k]] = ws.phi_q(r, k);
+    s.ldlt.solve(s.null_work);
+    s.null_basis.col(j).setZero();
+    s.null_basis(r, j) = 1.0;
+    for (int a = 0; a < ma; ++a) s.null_basis(s.active[a], j) = -s.null_work[s.pos[nq + a]];
+  }
+  s.null_gram.compute(s.null_basis.transpose() * s.null_basis);
+  s.null_dot.noalias() = s.null_basis.transpose() * ws.lambda;
+  s.null_gram.solveInPlace(s.null_dot);
+  ws.lambda.noalias() -= s.null_basis * s.null_dot;
 }
 
 }  // namespace lash

@@ -20,6 +20,7 @@
 /// ordered system is nonsingular and the fill follows the body graph: a crank shared by N
 /// slider-cranks costs O(N), where the Schur complement W alone has a dense block of 2N + 3 rows.
 #include <Eigen/Core>
+#include <Eigen/Cholesky>
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 #include <memory>
@@ -154,6 +155,13 @@ struct ConstraintSolver {
   std::vector<double> pivot_reference;
   FixedPatternLdlt ldlt;
   Eigen::VectorXd x;            ///< right-hand side, then solution, in elimination order
+  /// Redundant rows (dropped at assembly), ascending, and what reporting the smallest
+  /// multipliers takes (solve_constraints): a basis N of Φ_q's left null space (m × dropped),
+  /// its Gram matrix's factor and a work vector.
+  std::vector<int> dropped;
+  Eigen::MatrixXd null_basis;
+  Eigen::LLT<Eigen::MatrixXd> null_gram;
+  Eigen::VectorXd null_work, null_dot;
 };
 
 /// Φ_q's pattern (ws.m × ws.nq): `nonzero` is true at the entries a row may write, `fixed` at
@@ -182,5 +190,14 @@ void prepare_constraint_solver(const Model& model, Workspace& ws, const Eigen::M
 /// (γ_B): fills ws.qdd and ws.lambda (0 on dropped rows). Returns false if a value is not
 /// finite (a row pivot near 0 is floored, kPivotFloor; a coordinate pivot cannot vanish).
 bool solve_constraints(Workspace& ws);
+
+/// With redundant rows, after solve_constraints (its factorisation): replaces ws.lambda by the
+/// smallest multipliers (Euclidean norm over all rows) with the same generalised constraint
+/// force Φ_qᵀλ, so that the reactions reported do not depend on which rows were dropped (the
+/// model's order, the world's orientation): a double parallelogram's three cranks carry equal
+/// shares. Φ_qᵀλ, hence the motion and every power, is unchanged up to O(ε) (kRegularisation);
+/// near a singular position, where a pivot is floored, the left null space computed is that of
+/// the softened system. Nothing without redundant rows.
+void smallest_multipliers(Workspace& ws);
 
 }  // namespace lash

@@ -460,6 +460,7 @@ bool evaluate(const Model& model, Workspace& ws, double t, const double* y, doub
       ws.input_power += ws.lambda[r] * (rate - ws.phi_dot[r]);
     }
     ws.stabilization_power = ws.lambda.dot(ws.phi_dot);
+    smallest_multipliers(ws);  // after the powers: those of the solve itself
     ws.constraint_violation = ws.phi.cwiseAbs().maxCoeff();
   } else {
     // No constraints: M q̈ = g, block by block (a flexible link's block through its Cholesky

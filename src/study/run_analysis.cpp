@@ -666,6 +666,26 @@ struct Plan {
   int free_coordinates = 0;
 };
 
+/// Degrees of freedom at the run's start: coordinates less the independent constraint rows, as
+/// the constraint solver keeps them at assembly (a redundant joint equation is no restriction:
+/// a free double parallelogram of three cranks has nq − m = 0 but one degree of freedom). Where
+/// the start cannot be assembled, nq − m (the run fails and says why).
+int free_degrees(const Model& model, const AnalysisOptions& o) {
+  Workspace ws(model);
+  if (ws.m == 0) return ws.nq;
+  try {
+    if (o.from) {
+      if (!constraint_problem(model, ws, o.from->t, o.from->y, false).empty()) return ws.nq - ws.m;
+    } else {
+      initial_state(model, ws);
+    }
+  } catch (const std::exception&) {
+    return ws.nq - ws.m;
+  }
+  if (!ws.solver) return ws.nq - ws.m;
+  return ws.nq - static_cast<int>(ws.solver->active.size());
+}
+
 /// Checks the options and settles the plan; throws std::invalid_argument naming the option.
 Plan plan_analysis(const Model& model, const AnalysisOptions& o) {
   const SolverSettings& s = model.solver;
@@ -719,7 +739,7 @@ Plan plan_analysis(const Model& model, const AnalysisOptions& o) {
   const Workspace ws(model);
   p.channels = channel_info(model, ws);
   p.clearance_joints.assign(ws.clearance_joints.begin(), ws.clearance_joints.begin() + ws.nc);
-  p.free_coordinates = ws.nq - ws.m;
+  p.free_coordinates = free_degrees(model, o);
   auto known = [&](const std::string& name) {
     for (const auto& c : p.channels)
       if (c.name == name) return true;
