@@ -231,6 +231,30 @@ solver: {end_time: 0.5, output_interval: 0.01}
   EXPECT_GT(std::abs((*once.rec)["pin.Fy"].back()), 1.0);
 }
 
+TEST(Redundancy, AnInLineLoopThatCannotCloseSaysItsResidual) {
+  // The double parallelogram posed in line with its third ground pivot 1e-9 m off cannot be
+  // closed; the message printed the residual with %f, as "0.000000".
+  std::string yaml = parallelogram_yaml(3, 1.0, 0.0);
+  const std::string g2 = "G2: [2, 0]";
+  ASSERT_NE(yaml.find(g2), std::string::npos) << yaml;
+  yaml.replace(yaml.find(g2), g2.size(), "G2: [2.000000001, 0]");
+  const Model m = load_model_text(yaml, "inline.yaml").model;
+  Workspace ws(m);
+  try {
+    initial_state(m, ws);
+    FAIL() << "expected an assembly failure";
+  } catch (const std::runtime_error& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("initial assembly failed"), std::string::npos) << what;
+    EXPECT_EQ(what.find("0.000000"), std::string::npos) << what;
+    const size_t at = what.find("largest residual ");
+    ASSERT_NE(at, std::string::npos) << what;
+    const double r = std::stod(what.substr(at + 17));
+    EXPECT_GT(r, 1e-11) << what;  // measured 3.3e-10 m
+    EXPECT_LT(r, 1e-8) << what;
+  }
+}
+
 TEST(Redundancy, ReactionsOfARedundantLinkageDoNotDependOnTheWorldsAxes) {
   // The double parallelogram, and the same turned 60° with its gravity. Which equation is
   // dropped depends on the axes (the rows are taken in model order); the kept ones alone lose

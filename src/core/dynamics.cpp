@@ -5,6 +5,7 @@
 #include <Eigen/QR>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <random>
 #include <sstream>
 #include <stdexcept>
@@ -14,6 +15,14 @@
 #include "core/elements/registry.hpp"
 
 namespace lash {
+
+/// A constraint residual (m or rad) for a message: three significant digits, exponent form for
+/// small ones ("1e-09", where %f printed "0.000000").
+static std::string residual_text(double r) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.3g", r);
+  return b;
+}
 
 namespace {
 
@@ -542,7 +551,7 @@ void project_state(const Model& model, Workspace& ws, double t, Eigen::VectorXd&
   }
   if (!(residual < 1e-10))
     throw std::runtime_error("state projection onto the constraints did not converge (residual " +
-                             std::to_string(residual) + ")");
+                             residual_text(residual) + ")");
   update_kin(ws, y.data());
   build_constraints(model, ws, t, y.data(), false, phi, phi_q, &phi_dot, nullptr);
   Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(phi_q);
@@ -617,7 +626,7 @@ Eigen::VectorXd initial_state(const Model& model, Workspace& ws) {
   if (!(residual < 1e-10))
     throw std::runtime_error("initial assembly failed: the joints and drivers cannot all be "
                              "satisfied from the given poses (largest residual " +
-                             std::to_string(residual) +
+                             residual_text(residual) +
                              "); check the markers and initial positions");
 
   // Velocities: Φ_q q̇ = −Φ_t by the correction of the initial guess with the least kinetic
