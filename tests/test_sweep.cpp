@@ -351,6 +351,22 @@ TEST(StudyRun, ContinuationStartsEachRunWhereThePreviousEnded) {
   const RunRecord b = run_study_point(faster, fr[1], nullptr, &a);
   ASSERT_EQ(b.status, "completed") << b.message;
   EXPECT_NEAR(b.t_reached, 0.03 * 4000.0 / 5000.0 + 0.03, 1e-12);
+  // A soft contact over speed: the first run ends with its journal 2.3 mm into the bearing
+  // (K = 1e7 N/m^1.5), more than a tenth of the clearance, as the run itself reached it. It was
+  // refused as if the speed had changed the joint; the gap is the same under both models.
+  const StudySpec soft = from_text(
+      "set: {solver.end_time: 0.03, joints.rod_slider.stiffness: 1.0e7}\n"
+      "parameters:\n  drivers.crank.speed_rpm: {values: [4000, 5000]}\n"
+      "continuation: up\ntransient: {periods: 1}\n");
+  const auto so = study_runs(soft);
+  const RunRecord s0 = run_study_point(soft, so[0]);
+  ASSERT_EQ(s0.status, "completed") << s0.message;
+  ASSERT_EQ(s0.final_state.gaps.size(), 1u);
+  EXPECT_GT(s0.final_state.gaps[0], 0.1 * 0.5e-3);  // measured 2.3e-3 m
+  const RunRecord s1 = run_study_point(soft, so[1], nullptr, &s0);
+  EXPECT_EQ(s1.status, "completed") << s1.message;
+  // The gap travels with the state kept in the study's database (a resumed study).
+  EXPECT_EQ(state_from_json(state_json(s0.final_state)).gaps, s0.final_state.gaps);
 }
 
 TEST(StudyDatabase, KeepsRunsAndRefusesAnotherStudy) {

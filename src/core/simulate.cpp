@@ -646,6 +646,14 @@ RunResult simulate(const Model& model, Workspace& ws, Observer& observer,
   if (result.status.ok) result.status.t = s.end_time;  // the time reached
   else if (result.status.outcome == RunOutcome::completed) result.status.outcome = RunOutcome::failed;
   result.final_state = sim.snapshot();
+  // Each journal's gap under this model: a continuation under another model can tell whether
+  // the parameter changed the joint (resume_warnings, continuation in a study).
+  if (result.final_state.y.size() == ws.ny)
+    for (int c = 0; c < ws.nc; ++c) {
+      double delta, delta_dot;
+      clearance_gap(model, ws, c, result.final_state.y.data(), delta, delta_dot);
+      result.final_state.gaps.push_back(delta);
+    }
   result.stats = sim.stats();
   result.missed_events = ws.missed_events;
   result.wall_seconds =

@@ -891,14 +891,18 @@ RunRecord run_study_point(const StudySpec& spec, const StudyRun& run, const std:
       from->step = 0.0;
       Workspace pw(lm.model);
       project_state(lm.model, pw, t0, from->y);  // the new speed's velocity constraints
-      // A journal deeper in its bearing than contact ever drives it (the parameter changed the
-      // clearance or the geometry) would start with a spurious force spike: refused.
+      // A parameter that changed the clearance or the geometry can put a journal deeper in its
+      // bearing than contact ever drives it: a spurious force spike at the start, refused. A
+      // journal as deep as the previous run left it (a soft contact, a parameter such as the
+      // speed) is the state the run reached, and continues.
       Eigen::VectorXd ydot(pw.ny);
       evaluate(lm.model, pw, t0, from->y.data(), ydot.data());
       for (int c = 0; c < pw.nc; ++c) {
         const auto& joint = lm.model.joints[pw.clearance_joints[c]];
         const double depth = pw.clearance_out[c].delta, c_len = joint.clearance->clearance;
-        if (depth > 0.1 * c_len)
+        const bool same_gap = static_cast<int>(from->gaps.size()) == pw.nc &&
+                              std::abs(depth - from->gaps[c]) <= 1e-9 + 1e-6 * c_len;
+        if (depth > 0.1 * c_len && !same_gap)
           throw std::invalid_argument(
               "continuation: the previous run ends with joint '" + joint.name + "' " +
               number_text(depth * 1e3) + " mm into this run's bearing (clearance " +
@@ -999,7 +1003,7 @@ nlohmann::json state_json(const State& st) {
   std::vector<bool> modes;
   for (const auto& m : st.modes) modes.push_back(m.in_contact);
   return {{"t", st.t}, {"y", std::vector<double>(st.y.data(), st.y.data() + st.y.size())},
-          {"in_contact", modes}, {"step", st.step}};
+          {"in_contact", modes}, {"step", st.step}, {"gaps", st.gaps}};
 }
 
 State state_from_json(const nlohmann::json& j) {
@@ -1010,6 +1014,7 @@ State state_from_json(const nlohmann::json& j) {
   st.y = Eigen::Map<const Eigen::VectorXd>(y.data(), static_cast<Eigen::Index>(y.size()));
   for (bool c : j.at("in_contact").get<std::vector<bool>>()) st.modes.push_back(ContactState{c});
   st.step = j.at("step");
+  if (j.contains("gaps")) st.gaps = j.at("gaps").get<std::vector<double>>();
   return st;
 }
 
