@@ -298,6 +298,12 @@ static void build_solver(const Model& model, Workspace& ws, const Eigen::MatrixX
   for (int a = 0; a < ma; ++a) s->sign[s->pos[nq + a]] = -1;
   s->ldlt.analyze(s->k, fixed);
   s->x.resize(n);
+  s->pattern = pattern;
+  s->pattern.keep = keep;
+  if (!s->dropped.empty()) {
+    const Eigen::VectorXd sv = Eigen::JacobiSVD<Eigen::MatrixXd>(phi_q).singularValues();
+    s->rank_reference = sv[ma - 1] / sv[0];
+  }
   ws.lambda.setZero();
   ws.solver = std::move(s);
 }
@@ -536,6 +542,43 @@ void smallest_multipliers(Workspace& ws) {
   s.null_dot.noalias() = s.null_basis.transpose() * ws.lambda;
   s.null_gram.solveInPlace(s.null_dot);
   ws.lambda.noalias() -= s.null_basis * s.null_dot;
+}
+
+bool kept_rows_weak(const Workspace& ws) {
+  const ConstraintSolver& s = *ws.solver;
+  if (s.dropped.empty()) return false;
+  const int nq = ws.nq, ma = static_cast<int>(s.active.size());
+  const Eigen::VectorXd& d = s.ldlt.diagonal();
+  for (int a = 0; a < ma; ++a)
+    if (-d[s.pos[nq + a]] < kReselectPivot * s.pivot_reference[a]) return true;
+  return false;
+}
+
+bool reselect_redundant_rows(const Model& model, Workspace& ws) {
+  const ConstraintSolver& s = *ws.solver;
+  const int m = ws.m, nd = static_cast<int>(s.dropped.size());
+  // A basis of the left null space: the last nd left singular vectors of Φ_q.
+  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(ws.phi_q, Eigen::ComputeFullU);
+  // Near a singular position of the mechanism itself (Φ_q losing rank beyond its redundancy)
+  // every choice is weak, and pivots taken there as references would make the floor useless:
+  // the choice stays, and the floor carries the instant (kPivotFloor).
+  const Eigen::VectorXd& sv = svd.singularValues();
+  const double rank_ratio = m - nd > 0 ? sv[m - nd - 1] / sv[0] : 0.0;
+  if (!(rank_ratio > kReselectRank * s.rank_reference)) return false;
+  Eigen::MatrixXd nt = svd.matrixU().rightCols(nd).transpose();  // nd × m
+  for (int r : ws.row_of_driver) nt.col(r).setZero();
+  const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(nt);
+  std::vector<bool> keep(m, true);
+  for (int j = 0; j < nd; ++j) keep[qr.colsPermutation().indices()[j]] = false;
+  if (keep == s.pattern.keep) return false;
+  JacobianPattern pattern = s.pattern;
+  pattern.keep = std::move(keep);
+  const std::vector<std::string> warnings = ws.warnings;
+  const double rank_reference = s.rank_reference;
+  prepare_constraint_solver(model, ws, ws.phi_q, pattern);
+  ws.solver->rank_reference = rank_reference;  // the assembly's, not this instant's
+  ws.warnings = warnings;
+  return true;
 }
 
 }  // namespace lash

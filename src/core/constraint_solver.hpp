@@ -130,6 +130,14 @@ class FixedPatternLdlt {
   bool near_singular_ = false;
 };
 
+/// Φ_q's pattern (ws.m × ws.nq): `nonzero` is true at the entries a row may write, `fixed` at
+/// those of them whose value is the same at every configuration.
+struct JacobianPattern {
+  Eigen::Array<bool, Eigen::Dynamic, Eigen::Dynamic> nonzero, fixed;
+  /// Per row of Φ_q: kept (not redundant). Empty: independent_rows of the Φ_q given.
+  std::vector<bool> keep;
+};
+
 /// The sparse solver of one workspace: pattern, elimination order and factorisation.
 struct ConstraintSolver {
   using SparseMatrix = FixedPatternLdlt::SparseMatrix;
@@ -159,18 +167,13 @@ struct ConstraintSolver {
   /// multipliers takes (solve_constraints): a basis N of Φ_q's left null space (m × dropped),
   /// its Gram matrix's factor and a work vector.
   std::vector<int> dropped;
+  JacobianPattern pattern;  ///< as given at set-up (reselect_redundant_rows builds again from it)
+  double rank_reference = 0.0;  ///< σ_(m−dropped)/σ_1 of Φ_q at assembly (kReselectRank)
   Eigen::MatrixXd null_basis;
   Eigen::LLT<Eigen::MatrixXd> null_gram;
   Eigen::VectorXd null_work, null_dot;
 };
 
-/// Φ_q's pattern (ws.m × ws.nq): `nonzero` is true at the entries a row may write, `fixed` at
-/// those of them whose value is the same at every configuration.
-struct JacobianPattern {
-  Eigen::Array<bool, Eigen::Dynamic, Eigen::Dynamic> nonzero, fixed;
-  /// Per row of Φ_q: kept (not redundant). Empty: independent_rows of the Φ_q given.
-  std::vector<bool> keep;
-};
 
 /// Rows kept in order (greedy, modified Gram–Schmidt with reorthogonalisation): row i is
 /// redundant when its component outside the span of the rows kept before it is at most
@@ -199,5 +202,30 @@ bool solve_constraints(Workspace& ws);
 /// near a singular position, where a pivot is floored, the left null space computed is that of
 /// the softened system. Nothing without redundant rows.
 void smallest_multipliers(Workspace& ws);
+
+/// Which rows of a redundant set are dropped matters to the factorisation: the rows kept lose
+/// rank where a dropped row's share of the redundancy vanishes (a double parallelogram whose
+/// dropped row is coupler_2's y equation, where the cranks lie along the world's x axis),
+/// though Φ_q does not. A kept row whose pivot falls below kReselectPivot of its reference
+/// (its value when the rows were chosen) has the rows chosen again (reselect_redundant_rows),
+/// long before the pivot floor would soften it (kNearSingular, kPivotFloor).
+inline constexpr double kReselectPivot = 1e-2;
+/// The rows are not chosen again where the ratio σ_(m−dropped)/σ_1 of Φ_q's singular values
+/// (the smallest the redundancy leaves to the largest) is below this fraction of its value at
+/// assembly: the mechanism itself is then near a singular position, where every choice is weak
+/// and pivots taken as references would make the floor useless (kPivotFloor carries the
+/// instant). The ratio does not change with the world's axes.
+inline constexpr double kReselectRank = 0.1;
+
+/// With redundant rows: whether a kept row's pivot in the last factorisation is below
+/// kReselectPivot of its reference. False without redundant rows.
+bool kept_rows_weak(const Workspace& ws);
+
+/// Chooses the rows to drop again at ws.phi_q: those where the redundancy is largest (per
+/// basis vector of Φ_q's left null space, by a column-pivoted QR of its transpose: the rows
+/// with the largest shares, never a driver's) and sets the solver up for them, keeping
+/// ws.warnings (the run's, from assembly). Returns false, the solver unchanged, if the choice
+/// is the one in use.
+bool reselect_redundant_rows(const Model& model, Workspace& ws);
 
 }  // namespace lash

@@ -126,8 +126,20 @@ JacobianPattern jacobian_pattern(const Model& model, Workspace& ws, double t, co
             probe.head(ws.nq) -= Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd>(a).solve(phi);
         }
         if (residual < 1e-12) {  // pq is Φ_q at the converged probe (no step after the test)
-          const std::vector<bool> near = independent_rows(pq);
-          for (int i = 0; i < ws.m; ++i) pattern.keep[i] = pattern.keep[i] || near[i];
+          // The rows kept at y first: a row dropped at y stays dropped if the rows kept at y
+          // span it here too. (Each configuration's own greedy choice can drop different rows
+          // of one redundant set, as where a crank lies along a world axis; keeping the union
+          // kept the whole set.)
+          std::vector<int> order;
+          for (int i = 0; i < ws.m; ++i)
+            if (pattern.keep[i]) order.push_back(i);
+          for (int i = 0; i < ws.m; ++i)
+            if (!pattern.keep[i]) order.push_back(i);
+          Eigen::MatrixXd ordered(ws.m, ws.nq);
+          for (int k = 0; k < ws.m; ++k) ordered.row(k) = pq.row(order[k]);
+          const std::vector<bool> near = independent_rows(ordered);
+          for (int k = 0; k < ws.m; ++k)
+            if (near[k]) pattern.keep[order[k]] = true;
         }
       }
     }
@@ -458,6 +470,9 @@ bool evaluate(const Model& model, Workspace& ws, double t, const double* y, doub
     // γ_B = γ − 2αΦ̇ − β²Φ.
     ws.rhs_m = ws.gamma - (2.0 * a) * ws.phi_dot - (b * b) * ws.phi;
     if (!solve_constraints(ws)) return false;
+    // Redundant rows: the ones dropped are chosen again where the kept ones grow weak.
+    if (kept_rows_weak(ws) && reselect_redundant_rows(model, ws) && !solve_constraints(ws))
+      return false;
     // Power of the constraint forces λ·Φ_q q̇ = λ·(Φ̇ − Φ_t), split into the drivers' input
     // −λΦ_t (Φ_t = 0 for every other row) and the work on the drift, λ·Φ̇: Baumgarte's, which
     // would be 0 on the exact constraint manifold. A driver's Φ_q q̇ from its row's blocks.
