@@ -544,9 +544,13 @@ void smallest_multipliers(Workspace& ws) {
   ws.lambda.noalias() -= s.null_basis * s.null_dot;
 }
 
-bool kept_rows_weak(const Workspace& ws) {
-  const ConstraintSolver& s = *ws.solver;
+bool kept_rows_weak(Workspace& ws) {
+  ConstraintSolver& s = *ws.solver;
   if (s.dropped.empty()) return false;
+  if (s.reselect_wait > 0) {
+    --s.reselect_wait;
+    return false;
+  }
   const int nq = ws.nq, ma = static_cast<int>(s.active.size());
   const Eigen::VectorXd& d = s.ldlt.diagonal();
   for (int a = 0; a < ma; ++a)
@@ -564,7 +568,10 @@ bool reselect_redundant_rows(const Model& model, Workspace& ws) {
   // the choice stays, and the floor carries the instant (kPivotFloor).
   const Eigen::VectorXd& sv = svd.singularValues();
   const double rank_ratio = m - nd > 0 ? sv[m - nd - 1] / sv[0] : 0.0;
-  if (!(rank_ratio > kReselectRank * s.rank_reference)) return false;
+  if (!(rank_ratio > kReselectRank * s.rank_reference)) {
+    ws.solver->reselect_wait = kReselectWait;
+    return false;
+  }
   Eigen::MatrixXd nt = svd.matrixU().rightCols(nd).transpose();  // nd × m
   for (int r : ws.row_of_driver) nt.col(r).setZero();
   const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(nt);

@@ -169,6 +169,9 @@ struct ConstraintSolver {
   std::vector<int> dropped;
   JacobianPattern pattern;  ///< as given at set-up (reselect_redundant_rows builds again from it)
   double rank_reference = 0.0;  ///< σ_(m−dropped)/σ_1 of Φ_q at assembly (kReselectRank)
+  /// Evaluations left before the choice is tried again, after one refused near a singular
+  /// position (kReselectWait).
+  int reselect_wait = 0;
   Eigen::MatrixXd null_basis;
   Eigen::LLT<Eigen::MatrixXd> null_gram;
   Eigen::VectorXd null_work, null_dot;
@@ -216,10 +219,14 @@ inline constexpr double kReselectPivot = 1e-2;
 /// and pivots taken as references would make the floor useless (kPivotFloor carries the
 /// instant). The ratio does not change with the world's axes.
 inline constexpr double kReselectRank = 0.1;
+/// After a choice refused there, the next this many evaluations do not try again (each try is
+/// an SVD of Φ_q: near a singular position every evaluation would make one).
+inline constexpr int kReselectWait = 64;
 
 /// With redundant rows: whether a kept row's pivot in the last factorisation is below
-/// kReselectPivot of its reference. False without redundant rows.
-bool kept_rows_weak(const Workspace& ws);
+/// kReselectPivot of its reference. False without redundant rows, and while a refused choice
+/// waits (kReselectWait, counted down here).
+bool kept_rows_weak(Workspace& ws);
 
 /// Chooses the rows to drop again at ws.phi_q: those where the redundancy is largest (per
 /// basis vector of Φ_q's left null space, by a column-pivoted QR of its transpose: the rows

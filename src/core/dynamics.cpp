@@ -126,20 +126,8 @@ JacobianPattern jacobian_pattern(const Model& model, Workspace& ws, double t, co
             probe.head(ws.nq) -= Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd>(a).solve(phi);
         }
         if (residual < 1e-12) {  // pq is Φ_q at the converged probe (no step after the test)
-          // The rows kept at y first: a row dropped at y stays dropped if the rows kept at y
-          // span it here too. (Each configuration's own greedy choice can drop different rows
-          // of one redundant set, as where a crank lies along a world axis; keeping the union
-          // kept the whole set.)
-          std::vector<int> order;
-          for (int i = 0; i < ws.m; ++i)
-            if (pattern.keep[i]) order.push_back(i);
-          for (int i = 0; i < ws.m; ++i)
-            if (!pattern.keep[i]) order.push_back(i);
-          Eigen::MatrixXd ordered(ws.m, ws.nq);
-          for (int k = 0; k < ws.m; ++k) ordered.row(k) = pq.row(order[k]);
-          const std::vector<bool> near = independent_rows(ordered);
-          for (int k = 0; k < ws.m; ++k)
-            if (near[k]) pattern.keep[order[k]] = true;
+          const std::vector<bool> near = independent_rows(pq);
+          for (int i = 0; i < ws.m; ++i) pattern.keep[i] = pattern.keep[i] || near[i];
         }
       }
     }
