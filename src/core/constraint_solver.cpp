@@ -94,7 +94,6 @@ static void build_solver(const Model& model, Workspace& ws, const Eigen::MatrixX
   for (int i = 0; i < m; ++i) (keep[i] ? s->active : s->dropped).push_back(i);
   if (!s->dropped.empty()) {
     s->null_basis.resize(m, s->dropped.size());
-    s->null_gram = Eigen::LLT<Eigen::MatrixXd>(static_cast<Eigen::Index>(s->dropped.size()));
     s->null_work.resize(nq + m - s->dropped.size());
     s->null_dot.resize(s->dropped.size());
   }
@@ -462,16 +461,17 @@ void prepare_constraint_solver(const Model& model, Workspace& ws, const Eigen::M
   // the rows are independent, at the price of more fill).
   const int nq = ws.nq, ma = static_cast<int>(ws.solver->active.size());
   if (ma == 0) return;
-  auto factor_at_assembly = [&] {
+  auto factor_at = [&](const Eigen::MatrixXd& jacobian) {
     ConstraintSolver& s = *ws.solver;
     double* v = s.k.valuePtr();
     for (int a = 0; a < ma; ++a) {
       for (int e = s.phi_begin[a]; e < s.phi_begin[a + 1]; ++e)
-        v[s.phi_slot[e]] = phi_q(s.active[a], s.phi_col[e]);
+        v[s.phi_slot[e]] = jacobian(s.active[a], s.phi_col[e]);
       v[s.slot_reg[a]] = -s.regularisation[a];
     }
     return s.ldlt.factorize(s.k, s.sign);
   };
+  auto factor_at_assembly = [&] { return factor_at(phi_q); };
   bool ok = factor_at_assembly();
   for (int a = 0; a < ma && ok; ++a)
     ok = -ws.solver->ldlt.diagonal()[ws.solver->pos[nq + a]] > 1e-10 * ws.solver->w_diag[a];
@@ -489,15 +489,43 @@ void prepare_constraint_solver(const Model& model, Workspace& ws, const Eigen::M
   // rows the floor then softened for good).
   ConstraintSolver& s = *ws.solver;
   s.pivot_reference.clear();
+  s.provisional.clear();
   std::vector<double> floor(nq + ma, 0.0), near(nq + ma, 0.0);
+  for (int a = 0; a < ma; ++a) s.pivot_reference.push_back(-s.ldlt.diagonal()[s.pos[nq + a]]);
+  // Each row's largest pivot at the drawn configurations (Φ_q's values only; M and the pattern
+  // are the same there): a row far below it at assembly was assembled near a singular position.
+  if (!pattern.drawn.empty()) {
+    std::vector<double> drawn_pivot(ma, 0.0);
+    for (const Eigen::MatrixXd& drawn : pattern.drawn)
+      if (factor_at(drawn))
+        for (int a = 0; a < ma; ++a)
+          drawn_pivot[a] = std::max(drawn_pivot[a], -s.ldlt.diagonal()[s.pos[nq + a]]);
+    for (int a = 0; a < ma; ++a)
+      if (s.pivot_reference[a] < kReferenceShare * drawn_pivot[a]) {
+        s.provisional.push_back(a);
+        s.pivot_reference[a] = drawn_pivot[a];
+      }
+    factor_at_assembly();
+  }
   for (int a = 0; a < ma; ++a) {
     const int p = s.pos[nq + a];
-    const double reference = -s.ldlt.diagonal()[p];
-    s.pivot_reference.push_back(reference);
-    floor[p] = kPivotFloor * reference;
-    near[p] = kNearSingular * reference;
+    floor[p] = kPivotFloor * s.pivot_reference[a];
+    near[p] = kNearSingular * s.pivot_reference[a];
   }
   s.ldlt.set_row_floors(std::move(floor), std::move(near));
+}
+
+/// The references of the rows assembled near a singular position (kReferenceShare): the
+/// largest pivot so far, and the floors with them.
+static void update_pivot_references(int nq, ConstraintSolver& s) {
+  const Eigen::VectorXd& d = s.ldlt.diagonal();
+  for (int a : s.provisional) {
+    const int p = s.pos[nq + a];
+    if (-d[p] > s.pivot_reference[a]) {
+      s.pivot_reference[a] = -d[p];
+      s.ldlt.set_row_floor(p, kPivotFloor * -d[p], kNearSingular * -d[p]);
+    }
+  }
 }
 
 bool solve_constraints(Workspace& ws) {
@@ -510,6 +538,7 @@ bool solve_constraints(Workspace& ws) {
   // The −ε entries keep the values written at assembly (prepare_constraint_solver).
   const bool ok = s.ldlt.factorize(s.k, s.sign);
   if (!ok) return false;
+  if (!s.provisional.empty()) update_pivot_references(nq, s);
   s.ldlt.solve(s.x);
   for (int k = 0; k < nq; ++k) ws.qdd[k] = s.x[s.pos[k]];
   for (int a = 0; a < ma; ++a) ws.lambda[s.active[a]] = -s.x[s.pos[nq + a]];

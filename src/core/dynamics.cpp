@@ -77,7 +77,7 @@ constexpr int kPatternProbes = 3;
 JacobianPattern jacobian_pattern(const Model& model, Workspace& ws, double t, const double* y,
                                  const Eigen::MatrixXd& phi_q) {
   JacobianPattern pattern{phi_q.array() != 0.0,
-                          Eigen::Array<bool, Eigen::Dynamic, Eigen::Dynamic>::Ones(ws.m, ws.nq), {}};
+                          Eigen::Array<bool, Eigen::Dynamic, Eigen::Dynamic>::Ones(ws.m, ws.nq), {}, {}};
   Eigen::VectorXd probe = Eigen::Map<const Eigen::VectorXd>(y, ws.ny);
   Eigen::VectorXd phi(ws.m);
   Eigen::MatrixXd pq(ws.m, ws.nq);
@@ -89,6 +89,7 @@ JacobianPattern jacobian_pattern(const Model& model, Workspace& ws, double t, co
     build_constraints(model, ws, t, probe.data(), false, phi, pq, nullptr, nullptr);
     pattern.nonzero = pattern.nonzero || (pq.array() != 0.0);
     pattern.fixed = pattern.fixed && (pq.array() == phi_q.array());
+    pattern.drawn.push_back(pq);
   }
   // Redundant rows. At a singular position (a parallelogram's links in line, a four-bar's
   // change point) Φ_q loses rank at that configuration only: a row is dropped only if it is
