@@ -92,11 +92,9 @@ static void build_solver(const Model& model, Workspace& ws, const Eigen::MatrixX
   const std::vector<bool> keep =
       pattern.keep.empty() ? independent_rows(phi_q) : pattern.keep;
   for (int i = 0; i < m; ++i) (keep[i] ? s->active : s->dropped).push_back(i);
-  if (!s->dropped.empty()) {
-    s->null_basis.resize(m, s->dropped.size());
-    s->null_work.resize(nq + m - s->dropped.size());
-    s->null_dot.resize(s->dropped.size());
-  }
+  s->null_basis.resize(m, s->dropped.size());
+  s->null_work.resize(nq + m - s->dropped.size());
+  s->weak.reserve(s->active.size());
   ws.warnings.clear();
   if (static_cast<int>(s->active.size()) < m) {
     // Which kept rows span each dropped one: the least-squares combination of the kept rows.
@@ -548,16 +546,27 @@ bool solve_constraints(Workspace& ws) {
 
 void smallest_multipliers(Workspace& ws) {
   ConstraintSolver& s = *ws.solver;
-  if (s.dropped.empty()) return;
   const int nq = ws.nq, ma = static_cast<int>(s.active.size());
+  // Rows near a singular position: a pivot below kNearSingular of its reference.
+  const Eigen::VectorXd& d = s.ldlt.diagonal();
+  s.weak.clear();
+  for (int a = 0; a < ma; ++a)
+    if (-d[s.pos[nq + a]] < kNearSingular * s.pivot_reference[a]) s.weak.push_back(a);
+  if (s.dropped.empty() && s.weak.empty()) return;
   // Redundant rows. The multipliers of a redundant set are not unique: any self-equilibrated
   // set (a vector of Φ_q's left null space) can be added. Those of the kept rows alone (0 on the
   // dropped ones) depend on which rows were dropped, i.e. on the model's order and the world's
   // orientation. Reported instead: the smallest multipliers with the same generalised constraint
-  // force Φ_qᵀλ, λ − N (NᵀN)⁻¹ Nᵀ λ with N a basis of the left null space: per dropped row r,
+  // force Φ_qᵀλ, λ less its projection on the left null space, spanned by N: per dropped row r,
   // e_r − Σ_a c_a e_(kept a), where Φ_rᵀ = Σ_a c_a Φ_aᵀ; c from the factorisation at hand (the
   // augmented system with right-hand side [Φ_rᵀ; 0] has the solution [O(ε); c]).
-  const int nd = static_cast<int>(s.dropped.size());
+  // Near a singular position Φ_q has a nearly self-equilibrated set as well, along which the
+  // solve amplifies Baumgarte's terms and round-off by 1/pivot (a parallelogram's pivots, about
+  // 23.6 N through its in-line position, peaked at 220 N within 1e-3 rad of it): per weak row a,
+  // the multipliers of the solution with right-hand side e_a (inverse iteration: 1/d_a times
+  // that set, up to O(1)), scaled to unit length, are one more column of N.
+  const int nd = static_cast<int>(s.dropped.size()), nw = static_cast<int>(s.weak.size());
+  if (s.null_basis.cols() != nd + nw) s.null_basis.resize(ws.m, nd + nw);  // near singular only
   for (int j = 0; j < nd; ++j) {
     const int r = s.dropped[j];
     s.null_work.setZero();
@@ -567,10 +576,32 @@ void smallest_multipliers(Workspace& ws) {
     s.null_basis(r, j) = 1.0;
     for (int a = 0; a < ma; ++a) s.null_basis(s.active[a], j) = -s.null_work[s.pos[nq + a]];
   }
-  s.null_gram.compute(s.null_basis.transpose() * s.null_basis);
-  s.null_dot.noalias() = s.null_basis.transpose() * ws.lambda;
-  s.null_gram.solveInPlace(s.null_dot);
-  ws.lambda.noalias() -= s.null_basis * s.null_dot;
+  for (int j = 0; j < nw; ++j) {
+    s.null_work.setZero();
+    s.null_work[s.pos[nq + s.weak[j]]] = 1.0;
+    s.ldlt.solve(s.null_work);
+    auto col = s.null_basis.col(nd + j);
+    col.setZero();
+    for (int a = 0; a < ma; ++a) col[s.active[a]] = s.null_work[s.pos[nq + a]];
+    const double norm = col.norm();
+    if (!(norm > 0.0) || !std::isfinite(norm)) return;  // λ as solved
+    col /= norm;
+  }
+  // λ less its projection on the span of N, through an orthonormal basis (modified Gram–Schmidt,
+  // twice): near a singular position of a redundant linkage the two kinds of columns can be
+  // nearly parallel, and (NᵀN)⁻¹ then amplifies round-off (a double parallelogram in line
+  // reported 3.3e4 N). A column within 1e-8 of the span of those before it adds nothing.
+  int kept = 0;
+  for (int j = 0; j < nd + nw; ++j) {
+    auto col = s.null_basis.col(j);
+    const double before = col.norm();
+    for (int pass = 0; pass < 2; ++pass)
+      for (int i = 0; i < kept; ++i) col -= s.null_basis.col(i).dot(col) * s.null_basis.col(i);
+    const double after = col.norm();
+    if (!(after > 1e-8 * before)) continue;
+    s.null_basis.col(kept++) = col / after;
+  }
+  for (int i = 0; i < kept; ++i) ws.lambda -= s.null_basis.col(i).dot(ws.lambda) * s.null_basis.col(i);
 }
 
 bool kept_rows_weak(Workspace& ws) {

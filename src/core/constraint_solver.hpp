@@ -188,17 +188,18 @@ struct ConstraintSolver {
   FixedPatternLdlt ldlt;
   Eigen::VectorXd x;            ///< right-hand side, then solution, in elimination order
   /// Redundant rows (dropped at assembly), ascending, and what reporting the smallest
-  /// multipliers takes (solve_constraints): a basis N of Φ_q's left null space (m × dropped),
-  /// its Gram matrix's factor and a work vector.
+  /// multipliers takes (smallest_multipliers): a basis N of Φ_q's left null space (m × dropped,
+  /// and one more column per weak row near a singular position), orthonormalised in place, and
+  /// a work vector.
   std::vector<int> dropped;
   JacobianPattern pattern;  ///< as given at set-up (reselect_redundant_rows builds again from it)
   double rank_reference = 0.0;  ///< σ_(m−dropped)/σ_1 of Φ_q at assembly (kReselectRank)
   /// Evaluations left before the choice is tried again, after one refused near a singular
   /// position (kReselectWait).
   int reselect_wait = 0;
+  std::vector<int> weak;  ///< active rows near a singular position (smallest_multipliers)
   Eigen::MatrixXd null_basis;
-  Eigen::LLT<Eigen::MatrixXd> null_gram;
-  Eigen::VectorXd null_work, null_dot;
+  Eigen::VectorXd null_work;
 };
 
 
@@ -225,9 +226,12 @@ bool solve_constraints(Workspace& ws);
 /// smallest multipliers (Euclidean norm over all rows) with the same generalised constraint
 /// force Φ_qᵀλ, so that the reactions reported do not depend on which rows were dropped (the
 /// model's order, the world's orientation): a double parallelogram's three cranks carry equal
-/// shares. Φ_qᵀλ, hence the motion and every power, is unchanged up to O(ε) (kRegularisation);
-/// near a singular position, where a pivot is floored, the left null space computed is that of
-/// the softened system. Nothing without redundant rows.
+/// shares. Φ_qᵀλ, hence the motion and every power, is unchanged up to O(ε) (kRegularisation).
+/// Near a singular position (a row pivot below kNearSingular of its reference) the same is done
+/// along the nearly self-equilibrated set of multipliers found by inverse iteration on the
+/// factorisation: λ's component there is amplified Baumgarte terms and round-off, not the
+/// reaction (Φ_qᵀλ changes by that set's small Φ_qᵀ image). Nothing elsewhere, without
+/// redundant rows.
 void smallest_multipliers(Workspace& ws);
 
 /// Which rows of a redundant set are dropped matters to the factorisation: the rows kept lose
