@@ -294,20 +294,24 @@ TEST(Redundancy, ReactionsOfARedundantLinkageDoNotDependOnTheWorldsAxes) {
 
 TEST(Redundancy, ARedundantLinkageAssembledWithItsCranksOnAWorldAxisMovesAsUnturned) {
   // The double parallelogram turned 60° and posed at −60°: its cranks lie along the world's x
-  // axis at assembly, exactly or 1e-6° off. Exactly on it, the choices of the assembled and
-  // nearby configurations differ and every row is kept, the redundant one carried by the
-  // regularised solve (its pivot about ε); 1e-6° off, the kept rows start nearly singular. The
-  // reactions were a drifting split and the first 1e-6° off took 20 times the steps, with
-  // starting accelerations 20% off. The pivot that small at assembly takes its reference from
-  // the drawn configurations (kReferenceShare), and the multipliers along a pivot that weak
-  // are reported smallest (smallest_multipliers): both move as the unturned model.
+  // axis at assembly, exactly or 1e-6° off. Exactly on it, the rows dropped in the model's
+  // order at the assembled and a nearby configuration differed (coupler_2's y equation, which
+  // carries none of the redundancy there, and its x equation) and every row was kept, without a
+  // warning; 1e-6° off, the kept rows started nearly singular. The reactions were a drifting
+  // split and the first 1e-6° off took 20 times the steps, with starting accelerations 20% off.
+  // Now the row dropped is the last whose share of the redundancy is not near 0
+  // (rows_to_keep_by_share): coupler_2's x equation, with the warning the unturned model gets.
   const double turn = M_PI / 3;
   const SimRun plain = run_text(parallelogram_yaml(3, 1.0, -turn));
   ASSERT_TRUE(plain.result.status.ok) << plain.result.status.message;
+  ASSERT_EQ(plain.result.warnings.size(), 1u);
   for (const double off : {0.0, 1e-6 * M_PI / 180}) {
     SCOPED_TRACE(off);
     const SimRun turned = run_text(parallelogram_yaml(3, 1.0, -turn + off, turn));
     ASSERT_TRUE(turned.result.status.ok) << turned.result.status.message;
+    ASSERT_EQ(turned.result.warnings.size(), 1u);
+    EXPECT_EQ(turned.result.warnings[0].rfind("joint 'coupler_2': 1 of its 2 equations is redundant with ", 0), 0u)
+        << turned.result.warnings[0];
     EXPECT_LT(turned.result.stats.steps, 2 * plain.result.stats.steps);  // 3 522 and 3 466
     const auto& a = (*plain.rec)["crank_0.phi"];
     const auto& b = (*turned.rec)["crank_0.phi"];

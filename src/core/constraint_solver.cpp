@@ -80,6 +80,28 @@ std::vector<bool> independent_rows(const Eigen::MatrixXd& phi_q) {
   return keep;
 }
 
+std::vector<bool> rows_to_keep_by_share(const Eigen::MatrixXd& phi_q, int count,
+                                        const std::vector<int>& never) {
+  const int m = static_cast<int>(phi_q.rows());
+  std::vector<bool> keep(m, true);
+  if (count <= 0) return keep;
+  // A basis of the left null space: the last `count` left singular vectors of Φ_q.
+  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(phi_q, Eigen::ComputeFullU);
+  Eigen::MatrixXd basis = svd.matrixU().rightCols(count).transpose();  // count × m
+  for (int r : never) basis.col(r).setZero();
+  for (int j = 0; j < count; ++j) {
+    double top = 0.0;
+    for (int r = 0; r < m; ++r) top = std::max(top, basis.col(r).norm());
+    if (!(top > 0.0)) break;
+    int pick = m - 1;
+    while (!(basis.col(pick).norm() >= kDropShare * top)) --pick;
+    keep[pick] = false;
+    const Eigen::VectorXd q = basis.col(pick) / basis.col(pick).norm();
+    basis -= q * (q.transpose() * basis);  // the redundancies left, without the row picked
+  }
+  return keep;
+}
+
 /// The solver's rows, order and pattern; with `late`, every row is anchored to the last of its
 /// bodies in the order.
 static void build_solver(const Model& model, Workspace& ws, const Eigen::MatrixXd& phi_q,
@@ -407,6 +429,7 @@ bool FixedPatternLdlt::factorize(const SparseMatrix& upper, const std::vector<si
   double* l = l_.data();
   double* u = u_.data();
   double* d_inverse = d_inverse_.data();
+  weak_pivot_ = false;
   // Entry e of the list; false at a pivot of the wrong sign.
   auto compute = [&](int e) {
     double v = source[e] >= 0 ? ax[source[e]] : 0.0;
@@ -419,7 +442,7 @@ bool FixedPatternLdlt::factorize(const SparseMatrix& upper, const std::vector<si
     }
     const int i = -1 - t;
     if (sign[i] < 0 && !near_.empty() && v > -near_[i]) {  // NaN passes to the sign test
-      near_singular_ = true;
+      near_singular_ = weak_pivot_ = true;
       if (v > -floor_[i]) {
         v = -floor_[i];
         ++clamped_;
@@ -550,6 +573,7 @@ void smallest_multipliers(Workspace& ws) {
   // Rows near a singular position: a pivot below kNearSingular of its reference.
   const Eigen::VectorXd& d = s.ldlt.diagonal();
   s.weak.clear();
+  if (s.dropped.empty() && !s.ldlt.weak_pivot()) return;  // the factorisation found none
   for (int a = 0; a < ma; ++a)
     if (-d[s.pos[nq + a]] < kNearSingular * s.pivot_reference[a]) s.weak.push_back(a);
   if (s.dropped.empty() && s.weak.empty()) return;

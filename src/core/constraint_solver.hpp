@@ -37,6 +37,13 @@ struct Workspace;
 /// fraction of its norm.
 inline constexpr double kRedundancyTolerance = 1e-8;
 
+/// Which redundant rows are dropped at assembly (rows_to_drop): the last row in the model's
+/// order whose share of Φ_q's left null space (its entry's size) is at least this fraction of
+/// the largest share. With 0 that is the model's order; a row whose share is near 0 (a crank
+/// along a world axis makes one row of its redundant joint carry none of the redundancy) would
+/// leave the rows kept nearly dependent.
+inline constexpr double kDropShare = 0.1;
+
 /// The regularisation of the augmented system: row a gets ε_a = kRegularisation · W_aa, its own
 /// diagonal entry of W = Φ_q M⁻¹ Φ_qᵀ at assembly (about 100 units of round-off of that entry,
 /// so that no pivot changes sign by round-off), i.e. εD with D = diag(W). It changes λ by at most
@@ -120,6 +127,9 @@ class FixedPatternLdlt {
   long clamped() const { return clamped_; }  ///< pivots set to their floor, in all factorisations
   bool near_singular() const { return near_singular_; }  ///< since the last clear
   void clear_near_singular() { near_singular_ = false; }
+  /// Whether the last factorisation computed a pivot below its near-singular threshold (a pivot
+  /// that never varies is computed by the first one only: it equals its reference).
+  bool weak_pivot() const { return weak_pivot_; }
   /// x ← A⁻¹x, in elimination order.
   void solve(Eigen::VectorXd& x) const;
   const Eigen::VectorXd& diagonal() const { return d_; }  ///< D of L D Lᵀ
@@ -144,6 +154,7 @@ class FixedPatternLdlt {
   std::vector<double> floor_, near_;
   long clamped_ = 0;
   bool near_singular_ = false;
+  bool weak_pivot_ = false;
 };
 
 /// Φ_q's pattern (ws.m × ws.nq): `nonzero` is true at the entries a row may write, `fixed` at
@@ -208,10 +219,17 @@ struct ConstraintSolver {
 /// kRedundancyTolerance of its norm.
 std::vector<bool> independent_rows(const Eigen::MatrixXd& phi_q);
 
+/// The rows kept when `count` of Φ_q's rows are redundant: per redundancy (greedy, the left null
+/// space's basis deflated by each choice) the last row in order whose share is at least
+/// kDropShare of the largest; rows in `never` (drivers) are not dropped.
+std::vector<bool> rows_to_keep_by_share(const Eigen::MatrixXd& phi_q, int count,
+                                        const std::vector<int>& never);
+
 /// Sets up ws's constraint solver from Φ_q (ws.m × ws.nq) at an assembled configuration and
 /// the pattern of Φ_q (entries outside `nonzero` must stay 0 at every configuration and the
-/// `fixed` ones keep their value at phi_q: the solver reads neither again): detects redundant rows (kept rows in the order of the model: joints, then
-/// drivers), warns about them in ws.warnings naming the joints they are redundant with, and
+/// `fixed` ones keep their value at phi_q: the solver reads neither again): drops the rows
+/// `pattern.keep` leaves out (if empty, independent_rows of phi_q: the model's order, joints
+/// then drivers), warns about them in ws.warnings naming the joints they are redundant with, and
 /// computes the elimination order and the factorisation's pattern. Throws std::runtime_error if
 /// a driver's equation is redundant (its motion would be dropped).
 void prepare_constraint_solver(const Model& model, Workspace& ws, const Eigen::MatrixXd& phi_q,

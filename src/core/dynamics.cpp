@@ -92,14 +92,24 @@ JacobianPattern jacobian_pattern(const Model& model, Workspace& ws, double t, co
     pattern.drawn.push_back(pq);
   }
   // Redundant rows. At a singular position (a parallelogram's links in line, a four-bar's
-  // change point) Φ_q loses rank at that configuration only: a row is dropped only if it is
-  // redundant at an assembled configuration nearby too, reached by a move of 1e-3 along the
-  // null space of the joints' rows (the mechanism's motions with the drivers let go, the
-  // singular direction among them: a driven mechanism reaches the nearby configuration a
-  // moment later) and Newton's method back onto the joints. A row kept that way is carried by
-  // the regularised factorisation through the singular instant (constraint_solver.hpp).
+  // change point) Φ_q loses rank at that configuration only, so the rows are counted again at
+  // assembled configurations nearby, reached by a move along the null space of the joints' rows
+  // (the mechanism's motions with the drivers let go, the singular direction among them: a
+  // driven mechanism reaches a nearby configuration a moment later) and Newton's method back
+  // onto the joints: one move of 1e-3 and one of 3e-2 (a probe that lands on the singular
+  // position again, as Newton's minimum-norm steps may near a branch point, is outvoted). With
+  // as many redundant rows nearby as at assembly, the mechanism is redundant there: the rows
+  // dropped are chosen by their share of the redundancy (rows_to_keep_by_share: the model's
+  // order unless that leaves the rows kept nearly dependent, a crank along a world axis).
+  // With fewer, the assembly is at a singular position: a row is dropped only if it is
+  // redundant at every configuration, and one kept that way is carried by the regularised
+  // factorisation through the singular instant (constraint_solver.hpp). A redundant driver is
+  // left dropped (build_solver refuses it).
   pattern.keep = independent_rows(phi_q);
-  if (std::find(pattern.keep.begin(), pattern.keep.end(), false) != pattern.keep.end()) {
+  const int redundant = static_cast<int>(std::count(pattern.keep.begin(), pattern.keep.end(), false));
+  bool driver_dropped = false;
+  for (int r : ws.row_of_driver) driver_dropped = driver_dropped || !pattern.keep[r];
+  if (redundant > 0 && !driver_dropped) {
     auto joints_only = [&](Eigen::MatrixXd& a, Eigen::VectorXd* v) {
       for (int r : ws.row_of_driver) {
         a.row(r).setZero();
@@ -109,29 +119,35 @@ JacobianPattern jacobian_pattern(const Model& model, Workspace& ws, double t, co
     Eigen::MatrixXd joint_rows = phi_q;
     joints_only(joint_rows, nullptr);
     const Eigen::MatrixXd null = Eigen::FullPivLU<Eigen::MatrixXd>(joint_rows).kernel();
-    if (null.cols() > 0 && null.norm() > 0.0) {
+    std::vector<bool> keep_any = pattern.keep;  // rows kept at assembly or at some probe
+    int redundant_nearby = redundant;
+    for (const double move : {1e-3, 3e-2}) {
+      if (!(null.cols() > 0 && null.norm() > 0.0)) break;
       Eigen::VectorXd r(null.cols());
       for (int k = 0; k < r.size(); ++k) r[k] = unit(draw);
-      Eigen::VectorXd d = null * r;
-      if (d.norm() > 0.0) {
-        probe = Eigen::Map<const Eigen::VectorXd>(y, ws.ny);
-        probe.head(ws.nq) += 1e-3 * d / d.norm();
-        double residual = 1.0;
-        for (int it = 0; it < 50 && !(residual < 1e-12); ++it) {
-          update_kin(ws, probe.data());
-          build_constraints(model, ws, t, probe.data(), false, phi, pq, nullptr, nullptr);
-          Eigen::MatrixXd a = pq;
-          joints_only(a, &phi);
-          residual = phi.cwiseAbs().maxCoeff();
-          if (!(residual < 1e-12))
-            probe.head(ws.nq) -= Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd>(a).solve(phi);
-        }
-        if (residual < 1e-12) {  // pq is Φ_q at the converged probe (no step after the test)
-          const std::vector<bool> near = independent_rows(pq);
-          for (int i = 0; i < ws.m; ++i) pattern.keep[i] = pattern.keep[i] || near[i];
-        }
+      const Eigen::VectorXd d = null * r;
+      if (!(d.norm() > 0.0)) continue;
+      probe = Eigen::Map<const Eigen::VectorXd>(y, ws.ny);
+      probe.head(ws.nq) += move * d / d.norm();
+      double residual = 1.0;
+      for (int it = 0; it < 50 && !(residual < 1e-12); ++it) {
+        update_kin(ws, probe.data());
+        build_constraints(model, ws, t, probe.data(), false, phi, pq, nullptr, nullptr);
+        Eigen::MatrixXd a = pq;
+        joints_only(a, &phi);
+        residual = phi.cwiseAbs().maxCoeff();
+        if (!(residual < 1e-12))
+          probe.head(ws.nq) -= Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd>(a).solve(phi);
       }
+      if (!(residual < 1e-12)) continue;  // pq is Φ_q at the converged probe (no step after)
+      const std::vector<bool> near = independent_rows(pq);
+      redundant_nearby = std::min(
+          redundant_nearby, static_cast<int>(std::count(near.begin(), near.end(), false)));
+      for (int i = 0; i < ws.m; ++i) keep_any[i] = keep_any[i] || near[i];
     }
+    pattern.keep = redundant_nearby == redundant
+                       ? rows_to_keep_by_share(phi_q, redundant, ws.row_of_driver)
+                       : keep_any;
   }
   update_kin(ws, y);
   return pattern;
