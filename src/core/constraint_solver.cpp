@@ -320,8 +320,13 @@ static void build_solver(const Model& model, Workspace& ws, const Eigen::MatrixX
   s->pattern = pattern;
   s->pattern.keep = keep;
   if (!s->dropped.empty()) {
-    const Eigen::VectorXd sv = Eigen::JacobiSVD<Eigen::MatrixXd>(phi_q).singularValues();
-    s->rank_reference = sv[ma - 1] / sv[0];
+    auto ratio = [&](const Eigen::MatrixXd& jacobian) {
+      const Eigen::VectorXd sv = Eigen::JacobiSVD<Eigen::MatrixXd>(jacobian).singularValues();
+      return sv[ma - 1] / sv[0];
+    };
+    s->rank_reference = ratio(phi_q);
+    for (const Eigen::MatrixXd& near : pattern.nearby)
+      s->rank_reference = std::max(s->rank_reference, ratio(near));
   }
   ws.lambda.setZero();
   ws.solver = std::move(s);
@@ -645,6 +650,7 @@ bool kept_rows_weak(Workspace& ws) {
 bool reselect_redundant_rows(const Model& model, Workspace& ws) {
   const ConstraintSolver& s = *ws.solver;
   const int m = ws.m, nd = static_cast<int>(s.dropped.size());
+  ++ws.row_choices;
   // A basis of the left null space: the last nd left singular vectors of Φ_q.
   const Eigen::JacobiSVD<Eigen::MatrixXd> svd(ws.phi_q, Eigen::ComputeFullU);
   // Near a singular position of the mechanism itself (Φ_q losing rank beyond its redundancy)
@@ -661,7 +667,10 @@ bool reselect_redundant_rows(const Model& model, Workspace& ws) {
   const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(nt);
   std::vector<bool> keep(m, true);
   for (int j = 0; j < nd; ++j) keep[qr.colsPermutation().indices()[j]] = false;
-  if (keep == s.pattern.keep) return false;
+  if (keep == s.pattern.keep) {  // already the best: weak by the mechanism's own position
+    ws.solver->reselect_wait = kReselectWait;
+    return false;
+  }
   JacobianPattern pattern = s.pattern;
   pattern.keep = std::move(keep);
   const std::vector<std::string> warnings = ws.warnings;

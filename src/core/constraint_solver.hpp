@@ -166,6 +166,10 @@ struct JacobianPattern {
   /// Φ_q at the configurations drawn around the assembled one (a row's pivot there is its
   /// typical size: the reference of a row assembled near a singular position, kReferenceShare).
   std::vector<Eigen::MatrixXd> drawn;
+  /// Φ_q at the assembled configurations nearby where the rows were counted again (redundant
+  /// mechanisms only): with the assembled one, where σ_(m−dropped)/σ_1 takes its reference
+  /// (kReselectRank), so that one assembled near a singular position does not take it there.
+  std::vector<Eigen::MatrixXd> nearby;
 };
 
 /// The sparse solver of one workspace: pattern, elimination order and factorisation.
@@ -204,7 +208,9 @@ struct ConstraintSolver {
   /// a work vector.
   std::vector<int> dropped;
   JacobianPattern pattern;  ///< as given at set-up (reselect_redundant_rows builds again from it)
-  double rank_reference = 0.0;  ///< σ_(m−dropped)/σ_1 of Φ_q at assembly (kReselectRank)
+  /// σ_(m−dropped)/σ_1 of Φ_q, the largest at assembly and the configurations nearby
+  /// (JacobianPattern::nearby; kReselectRank)
+  double rank_reference = 0.0;
   /// Evaluations left before the choice is tried again, after one refused near a singular
   /// position (kReselectWait).
   int reselect_wait = 0;
@@ -265,8 +271,9 @@ inline constexpr double kReselectPivot = 1e-2;
 /// and pivots taken as references would make the floor useless (kPivotFloor carries the
 /// instant). The ratio does not change with the world's axes.
 inline constexpr double kReselectRank = 0.1;
-/// After a choice refused there, the next this many evaluations do not try again (each try is
-/// an SVD of Φ_q: near a singular position every evaluation would make one).
+/// After a choice refused there, or one that comes out as the rows already dropped (the kept
+/// rows are weak by the mechanism's own position), the next this many evaluations do not try
+/// again (each try is an SVD of Φ_q: near a singular position every evaluation would make one).
 inline constexpr int kReselectWait = 64;
 
 /// With redundant rows: whether a kept row's pivot in the last factorisation is below

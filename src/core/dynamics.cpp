@@ -140,6 +140,7 @@ JacobianPattern jacobian_pattern(const Model& model, Workspace& ws, double t, co
           probe.head(ws.nq) -= Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd>(a).solve(phi);
       }
       if (!(residual < 1e-12)) continue;  // pq is Φ_q at the converged probe (no step after)
+      pattern.nearby.push_back(pq);
       const std::vector<bool> near = independent_rows(pq);
       redundant_nearby = std::min(
           redundant_nearby, static_cast<int>(std::count(near.begin(), near.end(), false)));

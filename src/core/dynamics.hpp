@@ -118,6 +118,9 @@ struct Workspace {
   double stabilization_power = 0.0;
   double constraint_violation = 0.0;  ///< max |Φ|, m or rad
   long rhs_evaluations = 0;
+  /// Choices of the redundant rows tried during the run (each an SVD of Φ_q:
+  /// reselect_redundant_rows), made or refused.
+  long row_choices = 0;
   long missed_events = 0;  ///< crossings found only by the mode/gap consistency check
 
   /// The cached kinematics of body b (the ground for kGround).
