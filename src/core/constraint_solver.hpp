@@ -37,7 +37,7 @@ struct Workspace;
 /// fraction of its norm.
 inline constexpr double kRedundancyTolerance = 1e-8;
 
-/// Which redundant rows are dropped at assembly (rows_to_drop): the last row in the model's
+/// Which redundant rows are dropped at assembly (rows_to_keep_by_share): the last row in the model's
 /// order whose share of Φ_q's left null space (its entry's size) is at least this fraction of
 /// the largest share. With 0 that is the model's order; a row whose share is near 0 (a crank
 /// along a world axis makes one row of its redundant joint carry none of the redundancy) would
