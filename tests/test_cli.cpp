@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -871,6 +872,27 @@ solver: {end_time: 0.05, output_interval: 0.001, rtol: 1.0e-8, atol: 1.0e-11}
                        "1 of its 2 equations is redundant with"),
             std::string::npos)
       << r.out;
+
+  // lash check says what assembly finds, as lash run does (it said only "ok").
+  const Result clearance = run_lash("check " + (dir / "dp.yaml").string());
+  EXPECT_EQ(clearance.code, 0) << clearance.out;
+  EXPECT_EQ(clearance.out.find("warning"), std::string::npos) << clearance.out;
+  {
+    std::ifstream in(dir / "dp.yaml");
+    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const std::string gap = ", clearance: 0.5e-3";
+    ASSERT_NE(text.find(gap), std::string::npos);
+    text.erase(text.find(gap), gap.size());
+    std::ofstream(dir / "ideal.yaml") << text;
+  }
+  const Result ideal = run_lash("check " + (dir / "ideal.yaml").string());
+  EXPECT_EQ(ideal.code, 0) << ideal.out;
+  EXPECT_NE(ideal.out.find("ideal.yaml: warning: joint 'coupler_2': 1 of its 2 equations is "
+                           "redundant with"),
+            std::string::npos)
+      << ideal.out;
+  EXPECT_NE(ideal.out.find("ideal.yaml: ok: 4 bodies, 6 joints (0 with clearance)"), std::string::npos)
+      << ideal.out;
   fs::remove_all(dir);
 }
 

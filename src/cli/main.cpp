@@ -327,13 +327,18 @@ int main(int argc, char** argv) {
   }
 
   if (*check) {
+    // What assembly finds is said as `lash run` says it: redundant joint equations dropped, an
+    // assembly that moved far from the positions given (a model that loads can still warn).
+    std::vector<std::string> warnings;
     try {
       lash::Workspace ws(model);
       lash::initial_state(model, ws);
+      warnings = ws.warnings;
     } catch (const std::exception& e) {
       std::cerr << model_path << ": " << e.what() << "\n";
       return 2;
     }
+    for (const auto& w : warnings) std::cerr << model_path << ": warning: " << w << "\n";
     std::cout << model_path << ": ok: " << model.bodies.size() << " bodies, "
               << model.joints.size() << " joints (" << model.clearance_joint_count()
               << " with clearance), " << model.drivers.size() << " drivers, "

@@ -59,7 +59,23 @@ bool independent_on_block(const Eigen::MatrixXd& phi_q, const std::vector<int>& 
   return sv[sv.size() - 1] >= kAnchorConditioning;
 }
 
+/// A basis of Φ_q's left null space (count × m, the combinations of rows that vanish): the last
+/// `count` left singular vectors of `svd`, with the columns of the rows in `never` (drivers',
+/// never dropped) zeroed.
+Eigen::MatrixXd left_null_basis(const Eigen::JacobiSVD<Eigen::MatrixXd>& svd, int count,
+                                const std::vector<int>& never) {
+  Eigen::MatrixXd basis = svd.matrixU().rightCols(count).transpose();
+  for (int r : never) basis.col(r).setZero();
+  return basis;
+}
+
 }  // namespace
+
+double rank_ratio(const Eigen::MatrixXd& phi_q, int kept) {
+  if (kept <= 0) return 0.0;
+  const Eigen::VectorXd sv = Eigen::JacobiSVD<Eigen::MatrixXd>(phi_q).singularValues();
+  return sv[0] > 0.0 ? sv[kept - 1] / sv[0] : 0.0;
+}
 
 std::vector<bool> independent_rows(const Eigen::MatrixXd& phi_q) {
   const int m = static_cast<int>(phi_q.rows());
@@ -85,10 +101,8 @@ std::vector<bool> rows_to_keep_by_share(const Eigen::MatrixXd& phi_q, int count,
   const int m = static_cast<int>(phi_q.rows());
   std::vector<bool> keep(m, true);
   if (count <= 0) return keep;
-  // A basis of the left null space: the last `count` left singular vectors of Φ_q.
-  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(phi_q, Eigen::ComputeFullU);
-  Eigen::MatrixXd basis = svd.matrixU().rightCols(count).transpose();  // count × m
-  for (int r : never) basis.col(r).setZero();
+  Eigen::MatrixXd basis =
+      left_null_basis(Eigen::JacobiSVD<Eigen::MatrixXd>(phi_q, Eigen::ComputeFullU), count, never);
   for (int j = 0; j < count; ++j) {
     double top = 0.0;
     for (int r = 0; r < m; ++r) top = std::max(top, basis.col(r).norm());
@@ -319,15 +333,7 @@ static void build_solver(const Model& model, Workspace& ws, const Eigen::MatrixX
   s->x.resize(n);
   s->pattern = pattern;
   s->pattern.keep = keep;
-  if (!s->dropped.empty()) {
-    auto ratio = [&](const Eigen::MatrixXd& jacobian) {
-      const Eigen::VectorXd sv = Eigen::JacobiSVD<Eigen::MatrixXd>(jacobian).singularValues();
-      return sv[ma - 1] / sv[0];
-    };
-    s->rank_reference = ratio(phi_q);
-    for (const Eigen::MatrixXd& near : pattern.nearby)
-      s->rank_reference = std::max(s->rank_reference, ratio(near));
-  }
+  if (!s->dropped.empty()) s->rank_reference = std::max(rank_ratio(phi_q, ma), pattern.nearby_rank);
   ws.lambda.setZero();
   ws.solver = std::move(s);
 }
@@ -651,7 +657,6 @@ bool reselect_redundant_rows(const Model& model, Workspace& ws) {
   const ConstraintSolver& s = *ws.solver;
   const int m = ws.m, nd = static_cast<int>(s.dropped.size());
   ++ws.row_choices;
-  // A basis of the left null space: the last nd left singular vectors of Φ_q.
   const Eigen::JacobiSVD<Eigen::MatrixXd> svd(ws.phi_q, Eigen::ComputeFullU);
   // Near a singular position of the mechanism itself (Φ_q losing rank beyond its redundancy)
   // every choice is weak, and pivots taken there as references would make the floor useless:
@@ -662,9 +667,8 @@ bool reselect_redundant_rows(const Model& model, Workspace& ws) {
     ws.solver->reselect_wait = kReselectWait;
     return false;
   }
-  Eigen::MatrixXd nt = svd.matrixU().rightCols(nd).transpose();  // nd × m
-  for (int r : ws.row_of_driver) nt.col(r).setZero();
-  const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(nt);
+  // The rows dropped: those of the largest shares in the redundancies (column pivoting).
+  const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(left_null_basis(svd, nd, ws.row_of_driver));
   std::vector<bool> keep(m, true);
   for (int j = 0; j < nd; ++j) keep[qr.colsPermutation().indices()[j]] = false;
   if (keep == s.pattern.keep) {  // already the best: weak by the mechanism's own position

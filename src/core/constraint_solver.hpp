@@ -166,10 +166,11 @@ struct JacobianPattern {
   /// Φ_q at the configurations drawn around the assembled one (a row's pivot there is its
   /// typical size: the reference of a row assembled near a singular position, kReferenceShare).
   std::vector<Eigen::MatrixXd> drawn;
-  /// Φ_q at the assembled configurations nearby where the rows were counted again (redundant
-  /// mechanisms only): with the assembled one, where σ_(m−dropped)/σ_1 takes its reference
-  /// (kReselectRank), so that one assembled near a singular position does not take it there.
-  std::vector<Eigen::MatrixXd> nearby;
+  /// The largest rank_ratio of Φ_q at the assembled configurations nearby where the rows were
+  /// counted again (redundant mechanisms only; 0 if none): with the assembled one's, the
+  /// reference of σ_(m−dropped)/σ_1 (kReselectRank), so that a mechanism assembled near a
+  /// singular position does not take it there.
+  double nearby_rank = 0.0;
 };
 
 /// The sparse solver of one workspace: pattern, elimination order and factorisation.
@@ -209,7 +210,7 @@ struct ConstraintSolver {
   std::vector<int> dropped;
   JacobianPattern pattern;  ///< as given at set-up (reselect_redundant_rows builds again from it)
   /// σ_(m−dropped)/σ_1 of Φ_q, the largest at assembly and the configurations nearby
-  /// (JacobianPattern::nearby; kReselectRank)
+  /// (JacobianPattern::nearby_rank; kReselectRank)
   double rank_reference = 0.0;
   /// Evaluations left before the choice is tried again, after one refused near a singular
   /// position (kReselectWait).
@@ -224,6 +225,10 @@ struct ConstraintSolver {
 /// redundant when its component outside the span of the rows kept before it is at most
 /// kRedundancyTolerance of its norm.
 std::vector<bool> independent_rows(const Eigen::MatrixXd& phi_q);
+
+/// σ_kept/σ_1 of Φ_q (its singular values in decreasing order): how far the `kept` rows are from
+/// losing rank; 0 if kept ≤ 0 or Φ_q is 0.
+double rank_ratio(const Eigen::MatrixXd& phi_q, int kept);
 
 /// The rows kept when `count` of Φ_q's rows are redundant: per redundancy (greedy, the left null
 /// space's basis deflated by each choice) the last row in order whose share is at least

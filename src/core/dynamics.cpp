@@ -120,6 +120,7 @@ JacobianPattern jacobian_pattern(const Model& model, Workspace& ws, double t, co
     joints_only(joint_rows, nullptr);
     const Eigen::MatrixXd null = Eigen::FullPivLU<Eigen::MatrixXd>(joint_rows).kernel();
     std::vector<bool> keep_any = pattern.keep;  // rows kept at assembly or at some probe
+    std::vector<Eigen::MatrixXd> nearby;        // Φ_q at the probes
     int redundant_nearby = redundant;
     for (const double move : {1e-3, 3e-2}) {
       if (!(null.cols() > 0 && null.norm() > 0.0)) break;
@@ -140,7 +141,7 @@ JacobianPattern jacobian_pattern(const Model& model, Workspace& ws, double t, co
           probe.head(ws.nq) -= Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd>(a).solve(phi);
       }
       if (!(residual < 1e-12)) continue;  // pq is Φ_q at the converged probe (no step after)
-      pattern.nearby.push_back(pq);
+      nearby.push_back(pq);
       const std::vector<bool> near = independent_rows(pq);
       redundant_nearby = std::min(
           redundant_nearby, static_cast<int>(std::count(near.begin(), near.end(), false)));
@@ -149,6 +150,9 @@ JacobianPattern jacobian_pattern(const Model& model, Workspace& ws, double t, co
     pattern.keep = redundant_nearby == redundant
                        ? rows_to_keep_by_share(phi_q, redundant, ws.row_of_driver)
                        : keep_any;
+    const int kept = static_cast<int>(std::count(pattern.keep.begin(), pattern.keep.end(), true));
+    for (const Eigen::MatrixXd& near : nearby)
+      pattern.nearby_rank = std::max(pattern.nearby_rank, rank_ratio(near, kept));
   }
   update_kin(ws, y);
   return pattern;
