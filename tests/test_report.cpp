@@ -167,6 +167,26 @@ TEST(Report, AFlexibleLinkCarriesItsDeflectionIntoTheAnimation) {
   EXPECT_FALSE(d["frames"]["deflection"].contains("crank"));  // rigid bodies have none
 }
 
+TEST(Report, JointsAreNamedByTheirKindAndGroundPointsByTheirMarker) {
+  // A distance joint was written as "fixed", and the ground's points as "ground.P" where the
+  // document names them by marker ("P"); a bare "ground" is its origin.
+  const Model model = load_model_text(R"Y(gravity: [0, -9.81]
+ground: {markers: {P: [0, 1]}}
+bodies:
+  bob: {mass: 1, position: [0.5, 1]}
+  arm: {mass: 1, inertia: 0.1, position: [0.25, 0], angle: 0, markers: {O: [-0.25, 0]}}
+joints:
+  rod: {type: distance, from: ground.P, to: bob}
+  pin: {type: revolute, journal: arm.O, bearing: ground}
+solver: {end_time: 0.01, output_interval: 0.001}
+)Y", "t.yaml", {}).model;
+  const json d = report_data(model, RunAnalysis{});
+  ASSERT_EQ(d["model"]["joints"].size(), 2u);
+  EXPECT_EQ(d["model"]["joints"][0]["type"], "distance");
+  EXPECT_EQ(d["model"]["joints"][1]["type"], "revolute");
+  EXPECT_EQ(d["model"]["ground_markers"], json({{"P", {0.0, 1.0}}, {"origin", {0.0, 0.0}}}));
+}
+
 TEST(Report, RoundingAndWhatIsMissing) {
   // A hand-made result: the document rounds series to six digits, keeps statistics exact, and
   // writes null for what was not computed.

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "core/elements/registry.hpp"
 #include "io/files.hpp"
 #include "report_assets.hpp"
 
@@ -50,13 +51,15 @@ json model_json(const Model& m) {
   json gm = json::object();
   for (const auto& jt : m.joints)
     for (const PointRef* p : {&jt.a, &jt.b})
-      if (p->body == kGround) gm[p->label.empty() ? "O" : p->label] = {p->s.x(), p->s.y()};
+      if (p->body == kGround) {
+        // Named as in the ground's markers: list ("ground.O" is "O"); "ground" is its origin.
+        const auto dot = p->label.find('.');
+        gm[dot == std::string::npos ? "origin" : p->label.substr(dot + 1)] = {p->s.x(), p->s.y()};
+      }
   j["ground_markers"] = gm;
   j["joints"] = json::array();
   for (const auto& jt : m.joints) {
-    const char* type = jt.type == JointType::revolute ? "revolute"
-                       : jt.type == JointType::translational ? "translational" : "fixed";
-    json x = {{"name", jt.name}, {"type", type}, {"a", point_json(m, jt.a)},
+    json x = {{"name", jt.name}, {"type", kind_of(jt).name}, {"a", point_json(m, jt.a)},
               {"b", point_json(m, jt.b)}, {"axis", {jt.axis.x(), jt.axis.y()}}};
     if (jt.clearance)
       x["clearance"] = {{"clearance", jt.clearance->clearance},
