@@ -19,6 +19,7 @@
 #include <cstdlib>
 #include <memory>
 #include <mutex>
+#include <regex>
 #include <sstream>
 #include <stdexcept>
 #include <thread>
@@ -56,9 +57,19 @@ py::array_t<double> to_numpy(std::vector<double>&& v) {
   return to_numpy(std::move(v), {n});
 }
 
-/// Runs `work` on a worker thread with the GIL released; the calling thread checks for signals
-/// every 50 ms. On one (Ctrl-C: Python's handler raises KeyboardInterrupt), `interrupt` is set,
-/// the work stops at its next output, and the Python exception is raised once it has.
+/// The identifier of Python's main thread (threading.main_thread().ident); the GIL is held.
+unsigned long main_thread_ident() {
+  static const unsigned long ident =
+      py::module_::import("threading").attr("main_thread")().attr("ident").cast<unsigned long>();
+  return ident;
+}
+
+/// Runs `work` on a worker thread with the GIL released; called from Python's main thread, the
+/// calling thread checks for signals every 50 ms. On one (Ctrl-C: Python's handler raises
+/// KeyboardInterrupt), `interrupt` is set, the work stops at its next output, and the Python
+/// exception is raised once it has. Signal handlers run only in the main thread, so another
+/// thread just waits, without taking the GIL: a daemon thread that takes it while the
+/// interpreter finalizes is ended there (pthread_exit), which must not find the worker running.
 template <class R>
 R run_interruptible(const std::function<R()>& work, std::atomic<int>& interrupt) {
   R result{};
@@ -66,6 +77,7 @@ R run_interruptible(const std::function<R()>& work, std::atomic<int>& interrupt)
   bool done = false, signalled = false;
   std::mutex m;
   std::condition_variable cv;
+  const bool main_thread = PyThread_get_thread_ident() == main_thread_ident();
   {
     py::gil_scoped_release release;
     std::thread worker([&] {
@@ -78,10 +90,21 @@ R run_interruptible(const std::function<R()>& work, std::atomic<int>& interrupt)
       done = true;
       cv.notify_all();
     });
+    // Whatever unwinds this frame (the thread ended while it waits) stops and joins the worker
+    // first: it writes into this frame, and a joinable std::thread destroyed calls terminate.
+    struct StopAndJoin {
+      std::thread& worker;
+      std::atomic<int>& interrupt;
+      ~StopAndJoin() {
+        if (!worker.joinable()) return;
+        interrupt.store(SIGINT);
+        worker.join();
+      }
+    } stop_and_join{worker, interrupt};
     std::unique_lock<std::mutex> lock(m);
     while (!done) {
       cv.wait_for(lock, std::chrono::milliseconds(50));
-      if (done || signalled) continue;
+      if (done || signalled || !main_thread) continue;
       lock.unlock();
       {
         py::gil_scoped_acquire gil;
@@ -412,13 +435,15 @@ py::object scalar(const std::string& s) {
   if (s == "true" || s == "True") return py::bool_(true);
   if (s == "false" || s == "False") return py::bool_(false);
   if (s == "~" || s == "null") return py::none();
-  char* end = nullptr;
-  if (!s.empty()) {
-    const long long i = std::strtoll(s.c_str(), &end, 10);
-    if (*end == '\0') return py::int_(i);
-    const double d = std::strtod(s.c_str(), &end);
-    if (*end == '\0') return py::float_(d);
-  }
+  // A whole number only as written canonically ("007", "+5" and "0x1F" stay text: element
+  // names, and the loader reads them itself), any size (Python's int, never clamped); a real
+  // number only in decimal notation (not "inf", "nan" or hexadecimal).
+  static const std::regex integer("-?(0|[1-9][0-9]*)");
+  static const std::regex real(
+      "[-+]?((\\.[0-9]+|[0-9]+\\.[0-9]*)([eE][-+]?[0-9]+)?|[0-9]+[eE][-+]?[0-9]+)");
+  if (std::regex_match(s, integer))
+    return py::reinterpret_steal<py::object>(PyLong_FromString(s.c_str(), nullptr, 10));
+  if (std::regex_match(s, real)) return py::float_(std::strtod(s.c_str(), nullptr));
   return py::str(s);
 }
 

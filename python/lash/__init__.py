@@ -178,6 +178,7 @@ class Model:
         self.filename = filename
         self.overrides: List[str] = _override_list(overrides)
         self._compiled = None
+        self._compiled_from = None  # (text, overrides) the cached compiled model was loaded from
 
     # --- construction --------------------------------------------------------------------
     @classmethod
@@ -296,8 +297,12 @@ class Model:
             if extra_overrides:
                 return _lash.load_text(self.text(), name,
                                        self.overrides + _override_list(extra_overrides))
-            if self._compiled is None:
-                self._compiled = _lash.load_text(self.text(), name, self.overrides)
+            # Loaded again whenever the text or the overrides differ from the cached model's:
+            # `data` may be changed in place through a dict the caller kept.
+            key = (self.text(), tuple(self.overrides))
+            if self._compiled is None or self._compiled_from != key:
+                self._compiled = _lash.load_text(key[0], name, list(key[1]))
+                self._compiled_from = key
         except ModelError as e:
             raise _python_diagnostics(e, keywords or {}) from None
         return self._compiled
@@ -391,9 +396,10 @@ class Result:
     result.status        dict: outcome (completed, failed, interrupted), ok, time, element, message
     """
 
-    def __init__(self, model: Model, compiled, raw: dict) -> None:
+    def __init__(self, model: Model, compiled, raw: dict, overrides: Sequence[str] = ()) -> None:
         self.model = model
         self._compiled = compiled
+        self._overrides = list(overrides)  # every override of the run, simulate's included
         self.time: np.ndarray = raw["time"]
         self.values: np.ndarray = raw["values"]
         self.channels: List[str] = [c[0] for c in compiled.channels]
@@ -405,6 +411,10 @@ class Result:
             "time": ev["time"], "joint": np.array(ev["joint"], dtype=object),
             "event": np.where(ev["onset"], "onset", "separation").astype(object),
             "velocity": ev["velocity"]}
+        # Read-only: the channels are views of `values`, and the summary is computed from them
+        # on first use; a write through one (ax /= 9.81) would change every view and the summary.
+        for array in (self.time, self.values, *self.events.values()):
+            array.setflags(write=False)
         self.status: Dict[str, Any] = raw["status"]
         self.integrator: Dict[str, Any] = raw["integrator"]
         self.max_constraint_violation: float = raw["max_constraint_violation"]
@@ -492,7 +502,7 @@ class Result:
                 "integrator": dict(self.integrator),
                 "max_constraint_violation": self.max_constraint_violation,
                 "model": {"name": self._compiled.name, "file": self.model.filename,
-                          "overrides": list(self.model.overrides)}}
+                          "overrides": list(self._overrides)}}
 
     def to_pandas(self):
         """The time series as a pandas DataFrame indexed by time (needs pandas, e.g. Debian's
@@ -609,7 +619,7 @@ def simulate(model: Model | str | os.PathLike, t_end: Optional[float] = None, *,
     keywords = {p: k for p, k in _RUN_KEYWORDS.items()
                 if given[k] is not None and p not in set_by_caller}
     compiled = model.compiled(extra, keywords)
-    return Result(model, compiled, _lash.simulate(compiled))
+    return Result(model, compiled, _lash.simulate(compiled), model.overrides + extra)
 
 
 class Study:

@@ -46,11 +46,10 @@ def _c_int(name: str, value: Any) -> int:
 def _model_of(model_or_result):
     from . import Model, Result, _as_model
     if isinstance(model_or_result, Result):
-        # The same model and settings as the run (t_end included).
-        m = model_or_result.model.copy()
-        m.set("solver.end_time", model_or_result._compiled.end_time)
-        m.set("solver.output_interval", model_or_result._compiled.output_interval)
-        return m
+        # The model as the run ran it: its text with every override applied (simulate's t_end,
+        # integrator and overrides included), not the caller's Model, which may have changed.
+        return Model(model_or_result._compiled.resolved_yaml,
+                     filename=model_or_result.model.filename)
     return _as_model(model_or_result)
 
 

@@ -541,3 +541,53 @@ def test_analysis_options_are_checked_and_named_as_python_arguments():
     assert list(A.spectra(model, ["slider.ax"], np.int64(0))) == ["slider.ax"]
     assert A.poincare(model, planes="slider.vx=0")["planes"] == ["slider.vx=0"]
     assert A.classify_motion(np.float64("nan"), np.float32(0.012), np.int64(1), np.int32(4))[0]
+
+
+def test_a_result_is_analysed_as_it_ran_and_its_arrays_are_read_only():
+    # analyze(result) ran the caller's Model again with only t_end and output_interval: another
+    # integrator and clearance (simulate's arguments, a Model.set made after the run) slipped in.
+    model = lash.load(FLORES)
+    result = lash.simulate(model, 0.003, integrator="bdf",
+                           overrides=["joints.rod_slider.clearance=0.0004"])
+    model.set("joints.rod_slider.clearance", 3e-4)  # after the run: not part of it
+    assert result.summary["model"]["overrides"] == [
+        "joints.rod_slider.clearance=0.0004", "solver.end_time=0.003", "solver.integrator=bdf"]
+    a = lash.analysis.analyze(result, ideal_twin=False, lyapunov=False)
+    assert a["result"]["integrator"]["name"] == "bdf"
+    assert a["clearance_joints"]["rod_slider"]["clearance"] == pytest.approx(4e-4, rel=1e-12)
+    assert a["result"]["status"]["time"] == pytest.approx(0.003)
+    # A write through a view changed every view and the summary computed from them.
+    for array in (result.time, result.values, result["slider.ax"], result.events["joint"]):
+        with pytest.raises(ValueError, match="read-only"):
+            array[...] = 0
+    assert result.to_pandas().shape == (len(result.time), len(result.channels))
+
+
+def test_model_data_keeps_names_that_look_like_numbers_and_edits_in_place_count():
+    # "007" read as the number 7 made a driver's joint '7', unknown; an edit through a kept
+    # `data` dict after a check was ignored (the cached model was reused).
+    with open(FLORES, encoding="utf-8") as f:
+        text = f.read().replace("crank_pivot", "007")
+    model = lash.loads(text)
+    data = model.data
+    assert data["drivers"]["crank"]["joint"] == "007"
+    assert isinstance(data["solver"]["rtol"], float) and data["solver"]["rtol"] == 1e-8
+    model.check()
+    data["solver"]["end_time"] = 0.002
+    result = lash.simulate(model)
+    assert result.status["time"] == pytest.approx(0.002)
+    data["description"] = 99999999999999999999  # a whole number of any size, never clamped
+    assert lash.loads(lash._lash.emit_yaml(data)).data["description"] == 99999999999999999999
+
+
+def test_a_daemon_thread_still_simulating_at_exit_does_not_abort():
+    # The waiting thread took the GIL every 50 ms to check for signals; at interpreter exit a
+    # daemon thread is ended there, destroying a running std::thread: terminate, SIGABRT.
+    code = ("import lash, threading, time\n"
+            f"m = lash.load({FLORES!r})\n"
+            "threading.Thread(target=lambda: lash.simulate(m, 0.5), daemon=True).start()\n"
+            "time.sleep(0.2)\n")
+    for _ in range(3):
+        done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                              timeout=120)
+        assert done.returncode == 0, done.stderr
