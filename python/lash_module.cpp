@@ -447,16 +447,28 @@ py::object scalar(const std::string& s) {
   return py::str(s);
 }
 
-py::object from_yaml(const YAML::Node& n) {
+/// Most values Model.data builds: YAML aliases expand, and a few lines of them ("billion
+/// laughs", in a `description` the loader ignores) would expand without bound.
+constexpr long kMaxYamlValues = 10'000'000;
+
+py::object from_yaml(const YAML::Node& n, long& values, int depth = 0) {
+  if (depth > 1000)
+    throw std::length_error("the model nests more than 1000 maps and lists deep; Model.data "
+                            "cannot hold it");
+  if (++values > kMaxYamlValues)
+    throw std::length_error("the model holds more than " + std::to_string(kMaxYamlValues) +
+                            " values once its YAML aliases are expanded; Model.data cannot "
+                            "hold it (lash.simulate reads the file without expanding them)");
   switch (n.Type()) {
     case YAML::NodeType::Map: {
       py::dict d;
-      for (const auto& kv : n) d[py::str(kv.first.Scalar())] = from_yaml(kv.second);
+      for (const auto& kv : n)
+        d[py::str(kv.first.Scalar())] = from_yaml(kv.second, values, depth + 1);
       return std::move(d);
     }
     case YAML::NodeType::Sequence: {
       py::list l;
-      for (const auto& v : n) l.append(from_yaml(v));
+      for (const auto& v : n) l.append(from_yaml(v, values, depth + 1));
       return std::move(l);
     }
     case YAML::NodeType::Scalar:
@@ -647,7 +659,10 @@ PYBIND11_MODULE(_lash, m) {
     out << to_yaml(data);
     return std::string(out.c_str()) + "\n";
   }, py::arg("data"), "Python data as YAML text (yaml-cpp's emitter).");
-  m.def("parse_yaml", [](const std::string& text) { return from_yaml(YAML::Load(text)); },
+  m.def("parse_yaml", [](const std::string& text) {
+          long values = 0;
+          return from_yaml(YAML::Load(text), values);
+        },
         py::arg("text"), "YAML text as Python data (yaml-cpp's parser).");
 
   // --- the model-free analysis functions (analysis/) ----------------------------------------

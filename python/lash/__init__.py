@@ -293,6 +293,15 @@ class Model:
         `keywords` (model path -> argument name) names the overrides a function's keyword
         arguments made after those arguments in the error."""
         name = _message_name(self.filename)
+        # Python strings may hold lone surrogates (a file name or bytes decoded with
+        # surrogateescape); the loader takes UTF-8 text only.
+        for what, value in [("the model's text", self.text())] + [
+                (f"override {o!r}", o) for o in self.overrides + _override_list(extra_overrides)]:
+            try:
+                value.encode("utf-8")
+            except UnicodeEncodeError as e:
+                raise ValueError(f"{what[:200]}: not valid UTF-8 text (character {e.start}, "
+                                 f"{value[e.start]!r}); give text without lone surrogates") from None
         try:
             if extra_overrides:
                 return _lash.load_text(self.text(), name,
@@ -304,7 +313,8 @@ class Model:
                 self._compiled = _lash.load_text(key[0], name, list(key[1]))
                 self._compiled_from = key
         except ModelError as e:
-            raise _python_diagnostics(e, keywords or {}) from None
+            raise _python_diagnostics(e, keywords or {},
+                                      self.overrides + _override_list(extra_overrides)) from None
         return self._compiled
 
     def check(self) -> "Model":
@@ -325,9 +335,12 @@ class Model:
         """The model as it runs, overrides applied (what `lash run` writes to model_resolved.yaml)."""
         return self.compiled().resolved_yaml
 
-    def save(self, path: str) -> None:
+    def save(self, path: str | os.PathLike) -> None:
         """Writes the model file: the text as loaded when nothing changed (comments kept), else
         the model with its overrides applied. Validated first, so no broken file is written."""
+        if not isinstance(path, (str, os.PathLike)):  # open() takes an int as a descriptor
+            raise TypeError(f"path: expected a file name (str or os.PathLike), got {path!r} "
+                            f"({type(path).__name__})")
         compiled = self.compiled()
         text = self._text if (self._text is not None and not self.overrides) else compiled.resolved_yaml
         with open(path, "w", encoding="utf-8") as f:
@@ -559,7 +572,8 @@ def _run_overrides(t_end: Optional[float], output_interval: Optional[float],
     return extra
 
 
-def _python_diagnostics(error: ModelError, keywords: Dict[str, str]) -> ModelError:
+def _python_diagnostics(error: ModelError, keywords: Dict[str, str],
+                        overrides: Sequence[str] = ()) -> ModelError:
     """`error` in Python's terms. The C++ loader names an override as the CLI's option,
     "--set solver.end_time", and a value it set "(value set with --set)". Here an override
     that a keyword argument made (`keywords`: model path -> argument) is named as that
@@ -574,6 +588,13 @@ def _python_diagnostics(error: ModelError, keywords: Dict[str, str]) -> ModelErr
             file, changed = f"{keywords[path]} ({path})", True
         elif file == "--set" or file.startswith("--set "):
             file, changed = "override" + file[len("--set"):], True
+        if not message.endswith(set_with) and element == "solver" and not file.startswith("override"):
+            # A value of the file checked against one an argument set ("output_interval must
+            # be <= end_time, got 1e-05 > 1e-09" where t_end set end_time): say which.
+            named = [f"{p.split('.')[-1]} from the argument {k}" for p, k in keywords.items()
+                     if re.search(rf"\b{p.split('.')[-1]}\b", message)]
+            if named:
+                message, changed = message + f" ({'; '.join(named)})", True
         if message.endswith(set_with):
             # A solver value: the key the message is about opens it ("output_interval must be
             # > 0", "'end_time' must be a number", "unknown integrator 'rk4'").
@@ -581,9 +602,16 @@ def _python_diagnostics(error: ModelError, keywords: Dict[str, str]) -> ModelErr
             # outputs, more than max_outputs" names both).
             named = [k for p, k in keywords.items()
                      if element == "solver" and re.search(rf"\b{p.split('.')[-1]}\b", message)]
+            # and the overrides of solver keys that it names (a bad output_interval override
+            # beside t_end: "end_time / output_interval = 2e+297 outputs").
+            others = sorted({p for p in (o.split("=", 1)[0] for o in overrides)
+                             if p.startswith("solver.") and p not in keywords
+                             and element == "solver"
+                             and re.search(rf"\b{p.split('.')[-1]}\b", message)})
+            what = [f"the argument {k}" for k in named] + [f"the override {p}" for p in others]
             message = message[:-len(set_with)] + (
-                f" (value of the argument {named[0]})" if len(named) == 1 else
-                f" (values of the arguments {', '.join(named)})" if named else
+                f" (value of {what[0]})" if len(what) == 1 else
+                f" (values of {' and '.join(what)})" if what else
                 " (value set by an override)")
             changed = True
         diagnostics.append((file, line, column, element, message))
@@ -684,14 +712,20 @@ def sweep(study: str | os.PathLike, output: str | os.PathLike, *, jobs: Optional
     if isinstance(jobs, bool) or not isinstance(jobs, (int, np.integer)):
         raise TypeError(f"jobs: expected a number of threads (0 or None: every core), got "
                         f"{jobs!r} ({type(jobs).__name__})")
-    if jobs < 0:
-        raise ValueError(f"jobs={jobs}: expected 0 (every core) or a positive number")
+    if not 0 <= jobs <= 4096:
+        raise ValueError(f"jobs={jobs}: expected 0 (every core) or a number of threads up to 4096")
+    resume = _flag("resume", resume)
     if not os.fspath(output):
         raise ValueError("output: expected a folder name")
     study = os.fspath(study)
     with open(study, "rb"):  # FileNotFoundError, IsADirectoryError, ... with the path
         pass
-    _lash.sweep(study, os.fspath(output), int(jobs), resume)
+    try:
+        _lash.sweep(study, os.fspath(output), int(jobs), resume)
+    except ValueError as e:
+        if "add --resume" not in str(e):  # the CLI's option, resume=True here
+            raise
+        raise type(e)(str(e).replace("add --resume", "pass resume=True")) from None
     return Study(os.path.join(os.fspath(output), "study.db"))
 
 

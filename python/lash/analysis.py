@@ -7,6 +7,7 @@ model-free functions of src/analysis one to one: `amplitude_spectrum`, `count_di
 """
 from __future__ import annotations
 
+import math
 import re
 from typing import Any, Dict, Optional, Sequence, Tuple
 
@@ -104,6 +105,10 @@ def _run_analysis(model, keywords: Dict[str, str], *, ideal_twin: bool = True,
                             f"got {_short(stats_window)} ({type(stats_window).__name__})")
         opts["stats_window"] = (_real(f"{name('stats_window')}[0]", window[0], "a time (s)"),
                                 _real(f"{name('stats_window')}[1]", window[1], "a time (s)"))
+    cct = opts["continuous_contact_time"]
+    if not (math.isfinite(cct) and cct >= 0):  # the C++ side reads anything <= 0 as "default"
+        raise ValueError(f"{name('continuous_contact_time')}={continuous_contact_time!r}: expected "
+                         f"a time >= 0 s (0: the default, 10% of the driver period)")
     compiled = _model_of(model).compiled()
     try:
         return _lash.analyze(compiled, opts)
@@ -242,6 +247,10 @@ def contact_modes(times, onset, velocities, in_contact_at_t0: bool, t0: float, t
     if onset.ndim != 1:
         raise ValueError(f"onset: expected a 1-D sequence of booleans, got an array of shape "
                          f"{onset.shape}")
+    if onset.size and onset.dtype != np.bool_:
+        # bool("separation") is True: the event names passed as they are would all count as onsets.
+        raise TypeError(f"onset: expected booleans (ev[\"event\"] == \"onset\"), got "
+                        f"{onset.dtype} values such as {onset[0]!r}")
     return _lash.contact_modes(_vector("times", times).tolist(), [bool(o) for o in onset],
                                _vector("velocities", velocities).tolist(),
                                _flag("in_contact_at_t0", in_contact_at_t0),

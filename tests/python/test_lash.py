@@ -387,7 +387,7 @@ def test_sweep_from_python_equals_the_cli(tmp_path):
     c = lash.read_study(tmp_path / "cli")
     keep = lambda rows: [{k: v for k, v in r.items() if k != "wall_seconds"} for r in rows]
     assert keep(c.rows) == keep(s.rows)
-    with pytest.raises(ValueError, match="add --resume"):
+    with pytest.raises(ValueError, match="pass resume=True"):
         lash.sweep(study, tmp_path / "py")
     assert len(lash.sweep(study, tmp_path / "py", resume=True, jobs=None)) == 3  # None: every core
     bad = tmp_path / "bad.yaml"
@@ -591,3 +591,37 @@ def test_a_daemon_thread_still_simulating_at_exit_does_not_abort():
         done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                               timeout=120)
         assert done.returncode == 0, done.stderr
+
+
+def test_arguments_are_named_in_what_they_cause(tmp_path):
+    # A file's value refused against one an argument set named only the file's line.
+    with pytest.raises(lash.ModelError, match=r"output_interval must be <= end_time.*"
+                       r"\(end_time from the argument t_end\)\n$"):
+        lash.simulate(FLORES, t_end=1e-9)
+    # An override's bad value beside t_end blamed t_end alone.
+    with pytest.raises(lash.ModelError, match=r"more than max_outputs.*\(values of the argument "
+                       r"t_end and the override solver.output_interval\)\n$"):
+        lash.simulate(FLORES, t_end=0.002, overrides=["solver.output_interval=1e-300"])
+    # A lone surrogate: pybind11's "incompatible function arguments" and the whole text before.
+    with pytest.raises(ValueError, match=r"^override 'name=caf\\udce9': not valid UTF-8 text"):
+        lash.load(FLORES).set("name", "caf\udce9").check()
+    with pytest.raises(TypeError, match="^path: expected a file name"):
+        lash.load(FLORES).save(1)  # an int is a file descriptor to open(): stdout was closed
+    with pytest.raises(TypeError, match=r"^onset: expected booleans"):
+        lash.analysis.contact_modes([0.1, 0.2], ["separation", "separation"], [1.0, 1.0],
+                                    False, 0.0, 1.0, 0.05)
+    for bad in (-1.0, float("nan")):
+        with pytest.raises(ValueError, match=r"^continuous_contact_time=.*expected a time >= 0"):
+            lash.analysis.analyze(FLORES, continuous_contact_time=bad)
+    with pytest.raises(ValueError, match=r"^jobs=1099511627776: expected"):
+        lash.sweep(FLORES, tmp_path / "o", jobs=2**40)
+    with pytest.raises(TypeError, match=r"^resume: expected True or False"):
+        lash.sweep(FLORES, tmp_path / "o", resume="yes")
+    # Aliases that expand without bound ("billion laughs" in a description).
+    bomb = "description:\n" + "\n".join(
+        ["  - &a0 [1, 1, 1, 1, 1, 1, 1, 1, 1]"] +
+        [f"  - &a{i} [" + ", ".join([f"*a{i - 1}"] * 9) + "]" for i in range(1, 9)]) + "\n"
+    with open(FLORES, encoding="utf-8") as f:
+        model = lash.loads(bomb + f.read())
+    with pytest.raises(ValueError, match="more than 10000000 values once its YAML aliases"):
+        model.data
