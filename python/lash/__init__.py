@@ -44,7 +44,7 @@ __version__ = "0.1.0"
 
 def _yaml_value(value: Any) -> str:
     """A Python value as the text of an override value (shortest round-trip for floats)."""
-    if isinstance(value, bool):
+    if isinstance(value, (bool, np.bool_)):
         return "true" if value else "false"
     if isinstance(value, (int, float, np.floating, np.integer)):
         return repr(float(value)) if isinstance(value, (float, np.floating)) else str(int(value))
@@ -197,7 +197,17 @@ class Model:
 
         Reading it from a loaded file drops the file's comments from what `save` writes."""
         if self._data is None:
-            self._data = _lash.parse_yaml(self._text or "") or {}
+            try:
+                self._data = _lash.parse_yaml(self._text or "") or {}
+            except RuntimeError as e:  # yaml-cpp's parser: "yaml-cpp: error at line 3, column 5: ..."
+                m = re.match(r"yaml-cpp: error at line (\d+), column (\d+): (.*)", str(e), re.S)
+                where = (f"{_message_name(self.filename)}:{m.group(1)}:{m.group(2)}" if m
+                         else _message_name(self.filename))
+                error = ModelError(f"{where}: not valid YAML: {m.group(3) if m else e}\n")
+                error.diagnostics = [(_message_name(self.filename), int(m.group(1)) if m else 0,
+                                      int(m.group(2)) if m else 0, "",
+                                      f"not valid YAML: {m.group(3) if m else e}")]
+                raise error from None
             self._text = None
         self._compiled = None  # the caller may change it
         return self._data
@@ -448,7 +458,9 @@ class Result:
             return self.values[:, self._index[channel]]
         except KeyError:
             import difflib
-            near = difflib.get_close_matches(channel, self.channels, n=1)
+            # Case aside first ("slider.AX" is "slider.ax", not "slider.y").
+            near = [c for c in self.channels if c.lower() == channel.lower()] or \
+                difflib.get_close_matches(channel, self.channels, n=1)
             hint = f", did you mean '{near[0]}'?" if near else ""
             raise KeyError(f"no channel '{channel}' in this run{hint}") from None
 

@@ -625,3 +625,9 @@ def test_arguments_are_named_in_what_they_cause(tmp_path):
         model = lash.loads(bomb + f.read())
     with pytest.raises(ValueError, match="more than 10000000 values once its YAML aliases"):
         model.data
+    # Not YAML: a ModelError at the file's line and column (yaml-cpp's RuntimeError before).
+    with pytest.raises(lash.ModelError, match=r"^x.yaml:2:2: not valid YAML: end of sequence"):
+        lash.Model("a: [1, 2\nb: 3\n", filename="x.yaml").data
+    # A channel's name in another case: that channel is the hint ("slider.y" before).
+    with pytest.raises(KeyError, match="did you mean 'slider.ax'"):
+        lash.simulate(FLORES, 1e-4)["slider.AX"]
