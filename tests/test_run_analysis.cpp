@@ -385,9 +385,12 @@ TEST(RunAnalysis, LyapunovEstimateCarriesItsInputs) {
   const Analysed b = analyse(yaml, {"solver.end_time=0.036"}, o);
   ASSERT_TRUE(b.run.lyapunov.has_value());
   EXPECT_EQ(b.run.lyapunov->d0, 1e-8);
-  // Too short a run after the transient (less than one period): no estimate.
+  // Too short a run after the transient (less than one period): no estimate, and why.
   const Analysed c = analyse(yaml, {"solver.end_time=0.018"}, o);
-  EXPECT_FALSE(c.run.lyapunov.has_value());
+  ASSERT_TRUE(c.run.lyapunov.has_value());
+  EXPECT_FALSE(c.run.lyapunov->estimated);
+  EXPECT_NE(c.run.lyapunov->message.find("at least one period (0.012 s) needed"), std::string::npos)
+      << c.run.lyapunov->message;
   EXPECT_TRUE(std::isnan(c.run.verdict.lyapunov_exponent));
 }
 
@@ -458,7 +461,9 @@ solver: {end_time: 0.5, output_interval: 1e-3, initial_state: given}
   EXPECT_TRUE(r.period_driver.empty());
   EXPECT_TRUE(r.crank_angle_deg.empty());
   EXPECT_FALSE(r.poincare.has_value());
-  EXPECT_FALSE(r.lyapunov.has_value());
+  ASSERT_TRUE(r.lyapunov.has_value());  // not estimated, said why
+  EXPECT_FALSE(r.lyapunov->estimated);
+  EXPECT_NE(r.lyapunov->message.find("no period"), std::string::npos) << r.lyapunov->message;
   EXPECT_EQ(r.verdict.sections, 0);
 }
 

@@ -280,6 +280,57 @@ TEST(StudyRun, ABadParameterCombinationIsRecordedNotThrown) {
   EXPECT_EQ(back.section_values, good.section_values);
 }
 
+TEST(StudyRun, ALyapunovExponentNotComputedIsSaid) {
+  // 0.02 s at 5000 rpm leaves 0.008 s after the first section past the transient, less than a
+  // period: the exponent was left out of the metrics with no word on why.
+  const StudySpec spec = from_text(
+      "set: {solver.end_time: 0.02}\n"
+      "parameters:\n  drivers.crank.speed_rpm: {values: [5000]}\n"
+      "transient: {periods: 1}\n"
+      "lyapunov: true\n");
+  const RunRecord r = run_study_point(spec, study_runs(spec)[0]);
+  EXPECT_EQ(r.status, "completed") << r.message;
+  for (const auto& [name, v] : r.metrics) EXPECT_NE(name, "lyapunov_exponent");
+  EXPECT_NE(r.message.find("no Lyapunov exponent: the run leaves 0.008 s after its first section "
+                           "past the transient, at least one period (0.012 s) needed"),
+            std::string::npos)
+      << r.message;
+}
+
+TEST(StudyFile, AChannelKeptTwiceIsRefusedAtItsLine) {
+  // Its metrics collided in the database (UNIQUE constraint failed, every resume alike); its
+  // sections and series were stored twice.
+  for (const char* keep : {"keep: {channels: [slider.ax, slider.ax]}\n",
+                           "keep: {sections: [rod_slider.ex, rod_slider.ex]}\n",
+                           "keep: {series: {channels: [slider.ax, slider.ax]}}\n"}) {
+    std::string all;
+    try {
+      from_text(std::string("parameters:\n  drivers.crank.speed_rpm: {values: [5000]}\n") + keep);
+    } catch (const ModelError& e) {
+      for (const auto& d : e.diagnostics()) all += d.str() + "\n";
+    }
+    EXPECT_NE(all.find("s.yaml:5:"), std::string::npos) << keep << all;
+    EXPECT_NE(all.find("is listed twice; list each channel once"), std::string::npos) << keep << all;
+  }
+}
+
+TEST(StudyDatabase, AnotherProgramsDatabaseIsNotAdopted) {
+  // A study.db with tables of its own (no `study`) had the study's tables added to it.
+  const fs::path dir = temp_dir("foreign_db");
+  const std::string db = (dir / "study.db").string();
+  ASSERT_EQ(sh("/usr/bin/python3 -c \"import sqlite3; c = sqlite3.connect('" + db +
+               "'); c.execute('create table foo(x)'); c.commit()\"").code, 0);
+  const StudySpec spec = from_text("parameters:\n  drivers.crank.speed_rpm: {values: [1000]}\n");
+  try {
+    StudyDb study(db, spec, 1);
+    ADD_FAILURE() << "adopted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("not a lash study database (its tables: foo)"),
+              std::string::npos) << e.what();
+  }
+  fs::remove_all(dir);
+}
+
 TEST(StudyRun, PeakMetricsDoNotDependOnTheOutputInterval) {
   // The same runs written every 1e-3 s and every 1e-5 s: the kept channels' peaks after the
   // transient are found between outputs, so they agree although the coarse samples miss them.

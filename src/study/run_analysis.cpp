@@ -1100,7 +1100,21 @@ RunAnalysis analyze_samples(const Model& model, const AnalysisOptions& o, Plan& 
                              "sliding velocity changes sign (a continuous law — ambrosio, "
                              "adams_stepped, lugre — allows the variational method)";
       lyap = out.lyapunov->exponent;
+    } else {
+      LyapunovEstimate e;
+      e.message = "the run leaves " + fmt_g(s.end_time - lyapunov_t0) + " s after its first "
+                  "section past the transient, at least one period (" + fmt_g(p.period) +
+                  " s) needed: run longer or discard less";
+      out.lyapunov = e;
     }
+  } else if (o.lyapunov && out.result.status.ok && p.free_coordinates > 0) {
+    // Asked for and the run completed, yet nothing to start from: said, not left out silently.
+    LyapunovEstimate e;
+    e.message = p.period > 0 ? "the run ends before its first section past the transient: run "
+                               "longer or discard less"
+                             : "no period (no rotary driver with a constant mean speed; "
+                               "--period sets one)";
+    out.lyapunov = e;
   }
 
   const Verdict v =

@@ -126,9 +126,20 @@ StudyDb::StudyDb(const std::string& path, const StudySpec& spec, int total_runs)
     exec("PRAGMA synchronous=FULL");
     bool fresh = true;
     {
-      Stmt s(db_, "SELECT count(*) FROM sqlite_master WHERE type='table' AND name='study'", path_);
-      s.step();
-      fresh = s.number(0) == 0;
+      // Fresh: no table at all. Tables without `study` are another program's database, which
+      // a study written into would mix with (and --resume would adopt).
+      std::string others;
+      bool study = false;
+      Stmt s(db_, "SELECT name FROM sqlite_master WHERE type='table'", path_);
+      while (s.step()) {
+        const std::string name = s.text(0);
+        study = study || name == "study";
+        if (others.size() < 200) others += (others.empty() ? "" : ", ") + name;
+      }
+      fresh = others.empty();
+      if (!fresh && !study)
+        throw std::invalid_argument(path + ": not a lash study database (its tables: " + others +
+                                    "); choose another output folder");
     }
     if (fresh) {
       std::string runs = "CREATE TABLE runs(run INTEGER PRIMARY KEY";

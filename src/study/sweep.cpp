@@ -81,8 +81,15 @@ struct Reader {
       return out;
     }
     for (const auto& e : n) {
-      if (!e.IsScalar()) error(e, what + ": expected a channel name");
-      else out.push_back(e.Scalar());
+      if (!e.IsScalar()) {
+        error(e, what + ": expected a channel name");
+      } else if (std::find(out.begin(), out.end(), e.Scalar()) != out.end()) {
+        // Kept twice: its metrics' rows would collide in the database (every resume failing
+        // alike), its sections and series be stored twice.
+        error(e, what + ": '" + e.Scalar() + "' is listed twice; list each channel once");
+      } else {
+        out.push_back(e.Scalar());
+      }
     }
     return out;
   }
@@ -934,9 +941,13 @@ RunRecord run_study_point(const StudySpec& spec, const StudyRun& run, const std:
     rec.steps = res.stats.steps;
     rec.rhs_evaluations = res.stats.rhs_evaluations;
     rec.events = res.stats.events;
-    if (res.status.outcome == RunOutcome::interrupted) {
+    // A signal during the analyses after the run (the Lyapunov trajectories) leaves the run
+    // completed and its exponent missing: interrupted as well, not recorded, run again.
+    if (res.status.outcome == RunOutcome::interrupted || (interrupt && interrupt->load() != 0)) {
       rec.status = "interrupted";
-      rec.message = res.status.message;
+      rec.message = res.status.outcome == RunOutcome::interrupted
+                        ? res.status.message
+                        : "interrupted during the analyses after the run";
       rec.wall_seconds = elapsed();
       return rec;
     }
@@ -986,6 +997,10 @@ RunRecord run_study_point(const StudySpec& spec, const StudyRun& run, const std:
     rec.metrics.push_back({"distinct_points", static_cast<double>(ra.verdict.distinct_points)});
     if (!std::isnan(ra.verdict.lyapunov_exponent))
       rec.metrics.push_back({"lyapunov_exponent", ra.verdict.lyapunov_exponent});
+    else if (spec.lyapunov && res.status.ok)
+      rec.message += (rec.message.empty() ? "" : "; ") + std::string("no Lyapunov exponent: ") +
+                     (ra.lyapunov && !ra.lyapunov->message.empty() ? ra.lyapunov->message
+                                                                     : "not computed");
   } catch (const ModelError& e) {
     rec.status = "error";
     rec.message = ModelError(study_diagnostics(e.diagnostics(), spec)).what();
