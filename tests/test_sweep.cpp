@@ -297,6 +297,22 @@ TEST(StudyRun, ALyapunovExponentNotComputedIsSaid) {
       << r.message;
 }
 
+TEST(StudyFile, AStudyNameThatIsNoTextIsRefused) {
+  // study: [a, b], {x: 1}, ~ and "" were taken as the name "study" without a word.
+  for (const char* name : {"[a, b]", "{x: 1}", "~", "\"\""}) {
+    std::string all;
+    try {
+      load_study_text(std::string("study: ") + name + "\nmodel: " + example() +
+                          "\nparameters:\n  drivers.crank.speed_rpm: {values: [5000]}\n",
+                      "s.yaml", [](const std::string& p) { return lash::test::read_file(p); });
+    } catch (const ModelError& e) {
+      for (const auto& d : e.diagnostics()) all += d.str() + "\n";
+    }
+    EXPECT_NE(all.find("s.yaml:1:8: study: expected a name (text)"), std::string::npos)
+        << name << ": " << all;
+  }
+}
+
 TEST(StudyFile, AChannelKeptTwiceIsRefusedAtItsLine) {
   // Its metrics collided in the database (UNIQUE constraint failed, every resume alike); its
   // sections and series were stored twice.
@@ -509,6 +525,16 @@ TEST(SweepCli, CheckOfAStudyFileChecksItAsSweepDoes) {
   EXPECT_EQ(r.code, 0) << r.out;
   EXPECT_NE(r.out.find(good.string() + ": ok: study 'test', 2 runs of 1 model"), std::string::npos) << r.out;
   EXPECT_EQ(r.out.find("warning"), std::string::npos) << r.out;
+  // Without its optional `study:` key: checked as a study too (as a model before, with six
+  // unknown-key errors, while lash sweep ran it).
+  {
+    std::string text = lash::test::read_file(good.string());
+    text.erase(0, text.find('\n') + 1);
+    std::ofstream(dir / "unnamed.yaml") << text;
+  }
+  r = lash_cmd("check " + (dir / "unnamed.yaml").string());
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find(": ok: study 'study', 2 runs of 1 model"), std::string::npos) << r.out;
   // Each run is checked as the sweep starts it. With the default transient (5 periods: 0.1 s at
   // 3000 rpm) every run would be an error: refused, the runs named (it said "ok").
   const fs::path all_bad = write_study(

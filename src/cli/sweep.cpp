@@ -86,7 +86,8 @@ bool is_study_file(const std::string& path) {
     // Read as the model loader reads: a FIFO or a device is not opened, a huge file not read
     // (YAML::LoadFile hung on a FIFO and read /dev/zero without end).
     const YAML::Node root = YAML::Load(read_input_file(path, kMaxModelFileBytes));
-    return root.IsMap() && root["study"];
+    // `study:` may be left out (lash sweep names the study "study"); a model has no `model:`.
+    return root.IsMap() && (root["study"] || root["model"]);
   } catch (const std::exception&) {
     return false;
   }

@@ -42,7 +42,8 @@ class SweepCommand {
 /// runs with their errors. Returns the path written.
 std::string write_study_report(const std::string& folder);
 
-/// True if `path` holds a YAML map with a `study` key (false for anything else, a model, a file
+/// True if `path` holds a YAML map with a `study` or a `model` key, as a study file (`study:`
+/// may be left out) and never a model file (false for anything else, a model, a file
 /// that does not parse or is not a regular file of at most kMaxModelFileBytes: the model loader
 /// then reports it).
 bool is_study_file(const std::string& path);

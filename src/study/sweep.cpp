@@ -310,6 +310,9 @@ StudySpec load_study_text(const std::string& text, const std::string& file,
                 "lyapunov", "continuation"},
          "study");
   spec.name = root["study"] && root["study"].IsScalar() ? root["study"].Scalar() : "study";
+  if (const YAML::Node n = root["study"]; n && !(n.IsScalar() && !n.Scalar().empty()))
+    r.error(n, std::string("study: expected a name (text), got ") +
+                   (n.IsSequence() ? "a list" : n.IsMap() ? "a map" : "nothing"));
   if (!root["model"] || !root["model"].IsScalar()) {
     r.error(root, "study: 'model' (the base model file, relative to this file) is missing");
     throw ModelError(r.list);
