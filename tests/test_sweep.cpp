@@ -297,6 +297,24 @@ TEST(StudyRun, ALyapunovExponentNotComputedIsSaid) {
       << r.message;
 }
 
+TEST(StudyRun, AContinuationDoesNotGoOnFromAFailedRun) {
+  // The run after a failed one started from where the integrator gave up, and was recorded
+  // as completed.
+  const StudySpec spec = from_text(
+      "set: {solver.end_time: 0.02, solver.max_steps: 300}\n"
+      "parameters:\n  drivers.crank.speed_rpm: {values: [4000, 4500]}\n"
+      "transient: {time: 0.004}\ncontinuation: up\n");
+  const auto runs = study_runs(spec);
+  ASSERT_EQ(runs.size(), 2u);
+  const RunRecord first = run_study_point(spec, runs[0]);
+  ASSERT_EQ(first.status, "failed") << first.message;
+  EXPECT_EQ(first.final_state.y.size(), 0);
+  const RunRecord second = run_study_point(spec, runs[1], nullptr, &first);
+  EXPECT_EQ(second.status, "error");
+  EXPECT_NE(second.message.find("run 0, which this run continues, has no final state (failed)"),
+            std::string::npos) << second.message;
+}
+
 TEST(StudyFile, AStudyNameThatIsNoTextIsRefused) {
   // study: [a, b], {x: 1}, ~ and "" were taken as the name "study" without a word.
   for (const char* name : {"[a, b]", "{x: 1}", "~", "\"\""}) {

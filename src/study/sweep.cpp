@@ -954,7 +954,9 @@ RunRecord run_study_point(const StudySpec& spec, const StudyRun& run, const std:
       rec.wall_seconds = elapsed();
       return rec;
     }
-    if (!spec.continuation.empty()) {
+    // Only a completed run hands its state on: a failed one stopped where the integrator could
+    // not go on, not where the model was at its end time; the chain is an error from there.
+    if (!spec.continuation.empty() && res.status.ok) {
       rec.final_state = res.final_state;
       rec.driver_speed = drv ? drv->speed : 0.0;
     }
