@@ -94,6 +94,13 @@ TEST(ModelLoader, ClearanceLostInTheJournalRadiusIsRejected) {
   EXPECT_NE(d[0].str().find("joint 'gudgeon': clearance 0.0005 m is lost in journal radius"),
             std::string::npos)
       << d[0].str();
+  // A clearance set by an override is said to be one (it pointed at the joint's line in the
+  // file, whose own clearance is fine; a study's value then looked like the model's).
+  const auto o = problems(kGood, {"joints.gudgeon.clearance=1e-20"});
+  ASSERT_EQ(o.size(), 1u);
+  EXPECT_EQ(o[0].line, 0) << o[0].str();
+  EXPECT_NE(o[0].str().find("is lost in journal radius"), std::string::npos) << o[0].str();
+  EXPECT_NE(o[0].str().find("(value set with --set)"), std::string::npos) << o[0].str();
 }
 
 TEST(ModelLoader, UnknownKeySuggestsTheNearestOne) {

@@ -591,15 +591,17 @@ class Loader {
                "(here or in clearance_defaults)");
       return;
     }
+    // At the clearance's value where it has one (an override's is said to be one), else the joint.
+    const YAML::Node at = c.has("clearance") ? c.get("clearance") : s.node();
     if (!(cl.clearance > 0) || !(cl.journal_radius > 0)) {
-      r_.error(s.node(), s.element(),
+      r_.error(at, s.element(),
                "clearance must be > 0 and smaller than the bearing radius, got clearance " +
                    fmt_num(cl.clearance) + " m, journal radius " + fmt_num(cl.journal_radius) +
                    " m");
       return;
     }
     if (!(cl.journal_radius + cl.clearance > cl.journal_radius)) {
-      r_.error(s.node(), s.element(),
+      r_.error(at, s.element(),
                "clearance " + fmt_num(cl.clearance) + " m is lost in journal radius " +
                    fmt_num(cl.journal_radius) +
                    " m (their sum rounds to the journal radius in double precision); give the "
