@@ -197,7 +197,17 @@ def spectrum(result, channel: str, *, t0: float = 0.0, window: str = "hann") -> 
     t = result.time[keep]
     if len(t) < 4:
         raise ValueError(f"spectrum of '{channel}': fewer than 4 outputs after t0 = {t0} s")
-    return amplitude_spectrum(result[channel][keep], float(t[1] - t[0]), window)
+    # The last output is at end_time, off the output grid when end_time is not a whole number
+    # of intervals: left out, as the FFT takes evenly spaced samples.
+    dt = float(t[1] - t[0])
+    even = np.abs(np.diff(t) - dt) <= 1e-6 * dt
+    if not even[:-1].all():
+        raise ValueError(f"spectrum of '{channel}': the outputs after t0 = {t0} s are not evenly "
+                         f"spaced (at t = {float(t[int(np.argmin(even))]):g} s)")
+    x = result[channel][keep]
+    if not even[-1]:
+        x = x[:-1]
+    return amplitude_spectrum(x, dt, window)
 
 
 def amplitude_spectrum(x, dt: float, window: str = "hann") -> Dict[str, Any]:

@@ -631,3 +631,13 @@ def test_arguments_are_named_in_what_they_cause(tmp_path):
     # A channel's name in another case: that channel is the hint ("slider.y" before).
     with pytest.raises(KeyError, match="did you mean 'slider.ax'"):
         lash.simulate(FLORES, 1e-4)["slider.AX"]
+
+
+def test_the_spectrum_of_a_result_leaves_out_an_output_off_the_grid():
+    # end_time 0.01005 with outputs every 1e-3 s: the last output, 5e-5 s after the one before,
+    # was taken as one more 1e-3 s sample.
+    result = lash.simulate(FLORES, 0.01005, output_interval=1e-3)
+    assert result.time[-1] - result.time[-2] == pytest.approx(5e-5)
+    s = lash.analysis.spectrum(result, "slider.ax")
+    on_grid = lash.analysis.amplitude_spectrum(result["slider.ax"][:-1], 1e-3)
+    np.testing.assert_array_equal(s["amplitude"], on_grid["amplitude"])
