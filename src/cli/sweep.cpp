@@ -147,7 +147,7 @@ int check_study(const std::string& path) {
     for (const auto& [e, list] : errors) bad += list.size();
     const std::string of =
         checked == runs.size()
-            ? std::to_string(runs.size()) + " runs"
+            ? std::to_string(runs.size()) + (runs.size() == 1 ? " run" : " runs")
             : std::to_string(checked) + " of its " + std::to_string(runs.size()) + " runs (" +
                   (timed_out ? "those checked in " + std::to_string(static_cast<int>(kCheckSeconds)) + " s"
                              : std::string("every level, and runs drawn at random")) + ")";
