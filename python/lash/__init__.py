@@ -408,7 +408,7 @@ def loads(text: str, filename: str = "<string>", overrides: str | Iterable[str] 
 class Result:
     """The outputs of one run, in memory.
 
-    result["slider.ax"]  one channel as a NumPy array (a view of `values`, no copy)
+    result["slider.ax"]  one channel as a NumPy array (a read-only view of `values`, no copy)
     result.time          output times, s
     result.values        every channel, shape (outputs, channels), columns as `channels`
     result.channels      channel names; `units` and `descriptions` beside them
