@@ -42,9 +42,29 @@ fs::path write_study(const fs::path& dir, const std::string& body, const std::st
   return p;
 }
 
-StudySpec from_text(const std::string& body) {
-  const std::string text = "study: test\nmodel: " + example() + "\n" + body;
+StudySpec study_text(const std::string& text) {
   return load_study_text(text, "s.yaml", [](const std::string& p) { return lash::test::read_file(p); });
+}
+
+StudySpec from_text(const std::string& body) {
+  return study_text("study: test\nmodel: " + example() + "\n" + body);
+}
+
+/// The problems of a study file's whole text, one a line ("no error" if none).
+std::string text_problems(const std::string& text) {
+  try {
+    study_text(text);
+  } catch (const ModelError& e) {
+    std::string all;
+    for (const auto& d : e.diagnostics()) all += d.str() + "\n";
+    return all;
+  }
+  return "no error";
+}
+
+/// The problems of a study over the Flores example; `body` is everything after `model:`.
+std::string problems(const std::string& body) {
+  return text_problems("study: test\nmodel: " + example() + "\n" + body);
 }
 
 struct Result {
@@ -179,16 +199,6 @@ TEST(StudyFile, LatinHypercubeFillsEveryStratumOnceAndIsReproducible) {
 }
 
 TEST(StudyFile, ProblemsAreLocatedInTheStudyFile) {
-  auto problems = [](const std::string& body) {
-    try {
-      from_text(body);
-    } catch (const ModelError& e) {
-      std::string all;
-      for (const auto& d : e.diagnostics()) all += d.str() + "\n";
-      return all;
-    }
-    return std::string("no error");
-  };
   EXPECT_NE(problems("parameters:\n  drivers.crank.speed_rpm: {form: 1, to: 2, count: 3}\n")
                 .find("s.yaml:4:29: parameter 'drivers.crank.speed_rpm': unknown key 'form'"),
             std::string::npos)
@@ -318,14 +328,8 @@ TEST(StudyRun, AContinuationDoesNotGoOnFromAFailedRun) {
 TEST(StudyFile, AStudyNameThatIsNoTextIsRefused) {
   // study: [a, b], {x: 1}, ~ and "" were taken as the name "study" without a word.
   for (const char* name : {"[a, b]", "{x: 1}", "~", "\"\""}) {
-    std::string all;
-    try {
-      load_study_text(std::string("study: ") + name + "\nmodel: " + example() +
-                          "\nparameters:\n  drivers.crank.speed_rpm: {values: [5000]}\n",
-                      "s.yaml", [](const std::string& p) { return lash::test::read_file(p); });
-    } catch (const ModelError& e) {
-      for (const auto& d : e.diagnostics()) all += d.str() + "\n";
-    }
+    const std::string all = text_problems(std::string("study: ") + name + "\nmodel: " + example() +
+                                          "\nparameters:\n  drivers.crank.speed_rpm: {values: [5000]}\n");
     EXPECT_NE(all.find("s.yaml:1:8: study: expected a name (text)"), std::string::npos)
         << name << ": " << all;
   }
@@ -337,12 +341,8 @@ TEST(StudyFile, AChannelKeptTwiceIsRefusedAtItsLine) {
   for (const char* keep : {"keep: {channels: [slider.ax, slider.ax]}\n",
                            "keep: {sections: [rod_slider.ex, rod_slider.ex]}\n",
                            "keep: {series: {channels: [slider.ax, slider.ax]}}\n"}) {
-    std::string all;
-    try {
-      from_text(std::string("parameters:\n  drivers.crank.speed_rpm: {values: [5000]}\n") + keep);
-    } catch (const ModelError& e) {
-      for (const auto& d : e.diagnostics()) all += d.str() + "\n";
-    }
+    const std::string all =
+        problems(std::string("parameters:\n  drivers.crank.speed_rpm: {values: [5000]}\n") + keep);
     EXPECT_NE(all.find("s.yaml:5:"), std::string::npos) << keep << all;
     EXPECT_NE(all.find("is listed twice; list each channel once"), std::string::npos) << keep << all;
   }
@@ -790,35 +790,25 @@ namespace {
 /// The study header of the regression tests below: Flores, 0.024 s (2 periods at 5000 rpm).
 const std::string kShort =
     "set: {solver.end_time: 0.024, solver.output_interval: 1.0e-4}\ntransient: {periods: 1}\n";
-std::string study_problems(const std::string& body) {
-  try {
-    from_text(body);
-  } catch (const ModelError& e) {
-    std::string all;
-    for (const auto& d : e.diagnostics()) all += d.str() + "\n";
-    return all;
-  }
-  return "no error";
-}
 }  // namespace
 
 TEST(StudyFile, TwoParametersSettingOnePathAreRefusedWithBothPlaces) {
   // A parameter and a case of another parameter setting the same path: the row would name one
   // level and the model run with the other's value, whichever comes later. Refused, both ways.
-  const std::string a = study_problems(
+  const std::string a = problems(
       kShort + "parameters:\n  drivers.crank.speed_rpm: {values: [3000, 5000]}\n"
                "  variant: {cases: {slow: {drivers.crank.speed_rpm: 3000}, plain: {joints.rod_slider.restitution: 0.9}}}\n");
   EXPECT_NE(a.find("s.yaml:7:28: 'drivers.crank.speed_rpm' is set by case 'slow' of parameter 'variant' and by "
                    "parameter 'drivers.crank.speed_rpm' (line 6, column 3)"),
             std::string::npos) << a;
-  const std::string b = study_problems(
+  const std::string b = problems(
       kShort + "parameters:\n  variant: {cases: {slow: {drivers.crank.speed_rpm: 3000}, plain: {}}}\n"
                "  drivers.crank.speed_rpm: {values: [3000, 5000]}\n");
   EXPECT_NE(b.find("s.yaml:7:3: 'drivers.crank.speed_rpm' is set by parameter 'drivers.crank.speed_rpm' and by "
                    "case 'slow' of parameter 'variant' (line 6, column 28)"),
             std::string::npos) << b;
   // Two case parameters, and a path inside another's value.
-  const std::string c = study_problems(
+  const std::string c = problems(
       kShort + "parameters:\n  v1: {cases: {a: {joints.rod_slider.clearance: 1.0e-4}, b: {}}}\n"
                "  v2: {cases: {c: {joints.rod_slider: {clearance: 2.0e-4}}, d: {}}}\n");
   EXPECT_NE(c.find("'joints.rod_slider' is set by case 'c' of parameter 'v2' and 'joints.rod_slider.clearance' "
@@ -831,17 +821,17 @@ TEST(StudyFile, TwoParametersSettingOnePathAreRefusedWithBothPlaces) {
 }
 
 TEST(StudyFile, ACaseWithAPathTheModelLacksIsRefusedBeforeAnyRun) {
-  const std::string a = study_problems(
+  const std::string a = problems(
       kShort + "parameters:\n  variant: {cases: {a: {joints.nope.clearance: 0}, b: {drivers.crank.speed_rpm: 3000}}}\n");
   EXPECT_NE(a.find("s.yaml:6:25: 'joints.nope.clearance': no 'joints.nope' in the model"),
             std::string::npos) << a;
   EXPECT_EQ(a.find("--set"), std::string::npos) << a;
   // The same in the second case, after a first that loads.
-  const std::string b = study_problems(
+  const std::string b = problems(
       kShort + "parameters:\n  variant: {cases: {b: {drivers.crank.speed_rpm: 3000}, a: {joints.nope.clearance: 0}}}\n");
   EXPECT_NE(b.find("s.yaml:6:61: 'joints.nope.clearance': no 'joints.nope' in the model"), std::string::npos) << b;
   // A case whose value makes no model in any of its runs.
-  const std::string c = study_problems(
+  const std::string c = problems(
       kShort + "parameters:\n  variant: {cases: {b: {drivers.crank.speed_rpm: 3000}, a: {drivers.crank.speed_rpm: fast}}}\n");
   EXPECT_NE(c.find("s.yaml:6:57: parameter 'variant': case 'a' makes no valid model"), std::string::npos) << c;
   EXPECT_NE(c.find("(a value the study s.yaml sets"), std::string::npos) << c;
@@ -858,7 +848,7 @@ TEST(StudyRun, AValueErrorOfARunNamesTheStudyNotSet) {
   // At the key that set it (the message named the model file, with no line).
   EXPECT_EQ(bad.message.rfind("s.yaml:6:3: driver 'crank': ", 0), 0u) << bad.message;
   // A bad value in `set:` fails every run: refused before any, at its key.
-  const std::string set = study_problems(
+  const std::string set = problems(
       "set: {solver.end_time: 0.024, solver.rtol: 5}\nparameters:\n  drivers.crank.speed_rpm: {values: [5000]}\n");
   EXPECT_NE(set.find("s.yaml:3:31: solver: rtol must be in [1e-14, 0.1]"), std::string::npos) << set;
   EXPECT_NE(set.find("(a value the study s.yaml sets) (in run 0)"), std::string::npos) << set;
@@ -874,7 +864,7 @@ TEST(StudyRun, TransientTimeIsHonouredWithAConstantSpeedDriver) {
   // Sections at 0.012 and 0.024 s, both after 0.01 s.
   ASSERT_EQ(r.section_times.size(), 2u);
   EXPECT_NEAR(r.section_times[0], 0.012, 1e-12);
-  EXPECT_NE(study_problems("transient: {periods: 1, time: 0.01}\nparameters:\n  drivers.crank.speed_rpm: {values: [5000]}\n")
+  EXPECT_NE(problems("transient: {periods: 1, time: 0.01}\nparameters:\n  drivers.crank.speed_rpm: {values: [5000]}\n")
                 .find("transient: give periods (crank periods) or time (seconds), not both"),
             std::string::npos);
 }
@@ -902,14 +892,14 @@ TEST(StudyRun, ARunWhoseModelLacksAKeptChannelKeepsTheRest) {
     }
   }
   // A channel in no run's model is still refused.
-  EXPECT_NE(study_problems(kShort + "parameters:\n  joints.rod_slider.clearance: {values: [0, 1.0e-4]}\n"
+  EXPECT_NE(problems(kShort + "parameters:\n  joints.rod_slider.clearance: {values: [0, 1.0e-4]}\n"
                                     "keep: {channels: [rod_slider.Fnn]}\n")
                 .find("keep: no channel 'rod_slider.Fnn' in the model"),
             std::string::npos);
 }
 
 TEST(StudyFile, ContinuationLevelsThatStopOrReverseTheDriverAreRefused) {
-  const std::string a = study_problems(
+  const std::string a = problems(
       kShort + "parameters:\n  drivers.crank.speed_rpm: {values: [3000, 0, -3000]}\ncontinuation: up\n");
   EXPECT_NE(a.find("s.yaml:6:3: continuation: level '0' of 'drivers.crank.speed_rpm' gives no turning constant-speed rotary driver"),
             std::string::npos) << a;

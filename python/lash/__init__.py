@@ -201,12 +201,10 @@ class Model:
                 self._data = _lash.parse_yaml(self._text or "") or {}
             except RuntimeError as e:  # yaml-cpp's parser: "yaml-cpp: error at line 3, column 5: ..."
                 m = re.match(r"yaml-cpp: error at line (\d+), column (\d+): (.*)", str(e), re.S)
-                where = (f"{_message_name(self.filename)}:{m.group(1)}:{m.group(2)}" if m
-                         else _message_name(self.filename))
-                error = ModelError(f"{where}: not valid YAML: {m.group(3) if m else e}\n")
-                error.diagnostics = [(_message_name(self.filename), int(m.group(1)) if m else 0,
-                                      int(m.group(2)) if m else 0, "",
-                                      f"not valid YAML: {m.group(3) if m else e}")]
+                line, column, what = (int(m.group(1)), int(m.group(2)), m.group(3)) if m else (0, 0, str(e))
+                file = _message_name(self.filename)
+                error = ModelError(f"{file}{f':{line}:{column}' if m else ''}: not valid YAML: {what}\n")
+                error.diagnostics = [(file, line, column, "", f"not valid YAML: {what}")]
                 raise error from None
             self._text = None
         self._compiled = None  # the caller may change it
@@ -303,10 +301,10 @@ class Model:
         `keywords` (model path -> argument name) names the overrides a function's keyword
         arguments made after those arguments in the error."""
         name = _message_name(self.filename)
+        text, overrides = self.text(), self.overrides + _override_list(extra_overrides)
         # Python strings may hold lone surrogates (a file name or bytes decoded with
         # surrogateescape); the loader takes UTF-8 text only.
-        for what, value in [("the model's text", self.text())] + [
-                (f"override {o!r}", o) for o in self.overrides + _override_list(extra_overrides)]:
+        for what, value in [("the model's text", text)] + [(f"override {o!r}", o) for o in overrides]:
             try:
                 value.encode("utf-8")
             except UnicodeEncodeError as e:
@@ -314,17 +312,15 @@ class Model:
                                  f"{value[e.start]!r}); give text without lone surrogates") from None
         try:
             if extra_overrides:
-                return _lash.load_text(self.text(), name,
-                                       self.overrides + _override_list(extra_overrides))
+                return _lash.load_text(text, name, overrides)
             # Loaded again whenever the text or the overrides differ from the cached model's:
             # `data` may be changed in place through a dict the caller kept.
-            key = (self.text(), tuple(self.overrides))
+            key = (text, tuple(overrides))
             if self._compiled is None or self._compiled_from != key:
-                self._compiled = _lash.load_text(key[0], name, list(key[1]))
+                self._compiled = _lash.load_text(text, name, overrides)
                 self._compiled_from = key
         except ModelError as e:
-            raise _python_diagnostics(e, keywords or {},
-                                      self.overrides + _override_list(extra_overrides)) from None
+            raise _python_diagnostics(e, keywords or {}, overrides) from None
         return self._compiled
 
     def check(self) -> "Model":
@@ -600,26 +596,24 @@ def _python_diagnostics(error: ModelError, keywords: Dict[str, str],
             file, changed = f"{keywords[path]} ({path})", True
         elif file == "--set" or file.startswith("--set "):
             file, changed = "override" + file[len("--set"):], True
-        if not message.endswith(set_with) and element == "solver" and not file.startswith("override"):
+        def names(path: str) -> bool:  # a solver message about the key `path` sets
+            return element == "solver" and re.search(rf"\b{path.split('.')[-1]}\b", message)
+        if not message.endswith(set_with) and not file.startswith("override"):
             # A value of the file checked against one an argument set ("output_interval must
             # be <= end_time, got 1e-05 > 1e-09" where t_end set end_time): say which.
             named = [f"{p.split('.')[-1]} from the argument {k}" for p, k in keywords.items()
-                     if re.search(rf"\b{p.split('.')[-1]}\b", message)]
+                     if names(p)]
             if named:
                 message, changed = message + f" ({'; '.join(named)})", True
         if message.endswith(set_with):
             # A solver value: the key the message is about opens it ("output_interval must be
             # > 0", "'end_time' must be a number", "unknown integrator 'rk4'").
             # The arguments whose key the message names ("end_time / output_interval = 2.4e+10
-            # outputs, more than max_outputs" names both).
-            named = [k for p, k in keywords.items()
-                     if element == "solver" and re.search(rf"\b{p.split('.')[-1]}\b", message)]
-            # and the overrides of solver keys that it names (a bad output_interval override
-            # beside t_end: "end_time / output_interval = 2e+297 outputs").
+            # outputs, more than max_outputs" names both), and the overrides of solver keys
+            # that it names (a bad output_interval override beside t_end).
+            named = [k for p, k in keywords.items() if names(p)]
             others = sorted({p for p in (o.split("=", 1)[0] for o in overrides)
-                             if p.startswith("solver.") and p not in keywords
-                             and element == "solver"
-                             and re.search(rf"\b{p.split('.')[-1]}\b", message)})
+                             if p.startswith("solver.") and p not in keywords and names(p)})
             what = [f"the argument {k}" for k in named] + [f"the override {p}" for p in others]
             message = message[:-len(set_with)] + (
                 f" (value of {what[0]})" if len(what) == 1 else
