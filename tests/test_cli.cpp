@@ -768,6 +768,21 @@ TEST(Cli, OutputFolderNamesRunNoCommands) {
   fs::remove_all(dir);
 }
 
+TEST(Cli, AnEmptyOutputFolderIsRefused) {
+  // `-o ""` (an unset shell variable) wrote into out/<model name> without a word.
+  const fs::path dir = temp_dir("empty_o");
+  fs::create_directories(dir);
+  for (const std::string cmd : {"run " + example(), std::string("sweep study.yaml")}) {
+    const Result r = run_lash_raw("cd '" + dir.string() + "' && " + std::string(LASH_BINARY) + " " +
+                                  cmd + " -q -o ''");
+    EXPECT_EQ(r.code, 2) << cmd << "\n" << r.out;
+    EXPECT_NE(r.out.find("--output: is empty: name a folder, or leave out -o"), std::string::npos)
+        << r.out;
+  }
+  EXPECT_FALSE(fs::exists(dir / "out"));
+  fs::remove_all(dir);
+}
+
 TEST(Cli, AFolderHoldsOneRunAtATime) {
   const fs::path dir = temp_dir("twice");
   // The first run holds the folder for seconds; the second is refused with exit 2 and names it.

@@ -187,6 +187,9 @@ class Model:
         unless given, as in a model file (docs/model-format.md §2): gravity=[0, -9.81] (m/s^2)."""
         data: Dict[str, Any] = {"name": name}
         if gravity is not None:
+            if isinstance(gravity, (str, bytes)) or not isinstance(gravity, (Sequence, np.ndarray)):
+                raise TypeError(f"gravity: expected a pair of numbers [x, y] (m/s^2), got "
+                                f"{_short(gravity)} ({type(gravity).__name__})")
             data["gravity"] = list(gravity)
         data.update({"bodies": {}, "joints": {}})
         return cls(data=data, filename=f"<{name}>")

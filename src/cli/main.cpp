@@ -135,6 +135,11 @@ int main(int argc, char** argv) {
   run->add_option("-o,--output", out_dir,
                   "Output folder for timeseries.csv, events.csv, summary.json "
                   "(default: out/<model file name without extension>)")
+      ->check([](const std::string& f) {
+        return f.empty() ? std::string("is empty: name a folder, or leave out -o for "
+                                       "out/<model file name without extension>")
+                         : std::string();
+      })
       ->transform([](std::string f) { return lash::folder_name(std::move(f)); });
   run->add_option("--set", overrides,
                   "Override a model value before validation, KEY.PATH=VALUE, repeatable; "

@@ -277,6 +277,11 @@ SweepCommand::SweepCommand(CLI::App& app, char** argv) : argv_(argv) {
                "of an MPI job; results in OUTPUT/study.db (SQLite), runs.csv and sections.csv");
   sub_->add_option("study", study_, "Study file (YAML)")->required();
   sub_->add_option("-o,--output", out_, "Output folder (default: out/<study file name>)")
+      ->check([](const std::string& f) {
+        return f.empty() ? std::string("is empty: name a folder, or leave out -o for "
+                                       "out/<study file name>")
+                         : std::string();
+      })
       ->transform([](std::string f) { return lash::folder_name(std::move(f)); });
   sub_->add_option("-j,--jobs", jobs_, "Runs at once on this machine (default: every core)")
       ->check(CLI::Range(1, 4096));

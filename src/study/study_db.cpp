@@ -110,6 +110,29 @@ std::string model_texts_json(const StudySpec& spec, bool as_given = false) {
   return j.dump();
 }
 
+/// The model files whose text differs between a database's `model_texts` (`stored`) and the
+/// study's now, as model_texts_json writes them: `a.yaml, b.yaml (no longer used)`.
+std::string changed_models(const std::string& stored, const StudySpec& spec) {
+  const nlohmann::json was = nlohmann::json::parse(stored, nullptr, false);
+  nlohmann::json now = nlohmann::json::parse(model_texts_json(spec));
+  if (!was.is_object()) return "";
+  const nlohmann::json given = nlohmann::json::parse(model_texts_json(spec, true));
+  auto same_keys = [&](const nlohmann::json& a) {
+    if (a.size() != was.size()) return false;
+    for (const auto& item : a.items())
+      if (!was.contains(item.key())) return false;
+    return true;
+  };
+  if (!same_keys(now) && same_keys(given)) now = given;
+  std::string names;
+  auto add = [&](const std::string& name) { names += (names.empty() ? "" : ", ") + name; };
+  for (const auto& item : now.items())
+    if (!was.contains(item.key()) || was[item.key()] != item.value()) add(item.key());
+  for (const auto& item : was.items())
+    if (!now.contains(item.key())) add(item.key() + " (no longer used)");
+  return names;
+}
+
 }  // namespace
 
 StudyDb::StudyDb(const std::string& path, const StudySpec& spec, int total_runs) : path_(path) {
@@ -187,8 +210,13 @@ StudyDb::StudyDb(const std::string& path, const StudySpec& spec, int total_runs)
                                     "another output folder");
       if (info["model_texts"] != model_texts_json(spec) &&
           info["model_texts"] != model_texts_json(spec, true))
-        throw std::invalid_argument(path + ": the model file(s) changed since this study began; "
-                                    "resuming would mix two models: choose another output folder");
+      {
+        const std::string names = changed_models(info["model_texts"], spec);
+        throw std::invalid_argument(
+            path + ": the model file(s) changed since this study began" +
+            (names.empty() ? "" : " (" + names + ")") +
+            "; resuming would mix two models: choose another output folder");
+      }
     }
   } catch (...) {
     sqlite3_close(db_);

@@ -513,6 +513,8 @@ def test_analysis_options_are_checked_and_named_as_python_arguments():
         (lambda: A.classify_motion(0.0, 0.01, "1", 4), r"^distinct: expected a whole number"),
         (lambda: A.contact_modes([], [], [], "no", 0, 1, 0), r"^in_contact_at_t0: expected True or False"),
         (lambda: lash.loads(5), r"^text: expected the text of a model file \(str\), got 5 \(int\)$"),
+        (lambda: lash.Model.new("m", gravity=5), r"^gravity: expected a pair of numbers \[x, y\] \(m/s\^2\), got 5 \(int\)$"),
+        (lambda: lash.Model.new("m", gravity="0 -9.81"), r"^gravity: expected a pair of numbers"),
         (lambda: lash.loads("x: 1", filename=3), r"^filename: expected a file name"),
     ]
     for call, message in type_errors:
@@ -532,6 +534,7 @@ def test_analysis_options_are_checked_and_named_as_python_arguments():
         (lambda: A.count_distinct([1, 2, 3], 0.1), r"^points\[0\]: expected a 1-D sequence"),
         (lambda: A.count_distinct(np.zeros((2, 2, 2)), 0.1), r"^points\[0\]: expected a 1-D sequence of numbers, got an array of shape \(2, 2\)$"),
         (lambda: A.classify_motion(0.0, 0.01, 2**40, 4), r"^distinct: expected a whole number between"),
+        (lambda: A.classify_motion(0.0, -0.01, 1, 4), r"^period: expected a period \(s\) > 0, or 0 or NaN for none, got -0.01$"),
     ]
     for call, message in value_errors:
         with pytest.raises(ValueError, match=message):
