@@ -42,3 +42,22 @@ TEST(ChannelSelect, PatternMatchingNothingNamesTheClosest) {
                  "slider.vx, rod_slider.F");
   }
 }
+
+TEST(ChannelSelect, AnUnclosedSetIsSaidSoNotTakenForAName) {
+  // fnmatch takes a '[' that no ']' closes as itself: '[a-' matched no channel and the message
+  // offered the closest names, as for a misspelt one.
+  for (const std::string p : {"slider.[xv", "[a-", "slider.[!]", "rod_slider.[]"}) {
+    try {
+      lash::select_channels(channels(), {p});
+      ADD_FAILURE() << p << ": no error";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_EQ(std::string(e.what()),
+                "channel pattern '" + p + "': a '[' opens a set of characters that no ']' closes");
+    }
+  }
+  // Closed sets, a ']' first in a set among them, select as the shell does.
+  using V = std::vector<std::size_t>;
+  EXPECT_EQ(lash::select_channels(channels(), {"slider.[xv]*"}), (V{1, 2}));
+  EXPECT_EQ(lash::select_channels(channels(), {"slider.[!x]*"}), (V{2}));
+  EXPECT_EQ(lash::select_channels(channels(), {"rod_slider.[]F]*"}), (V{3, 4}));
+}

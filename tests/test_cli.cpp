@@ -783,6 +783,15 @@ TEST(Cli, AnEmptyOutputFolderIsRefused) {
   fs::remove_all(dir);
 }
 
+TEST(Cli, ChannelsThatNameNoPatternAreRefused) {
+  // `--channels ','` wrote every channel, as if the option were not given.
+  for (const std::string list : {",", " , ", ""}) {
+    const Result r = run_lash("run " + example() + " -q -o /nonexistent/x --channels '" + list + "'");
+    EXPECT_EQ(r.code, 2) << list << "\n" << r.out;
+    EXPECT_NE(r.out.find("--channels: names no channel pattern"), std::string::npos) << r.out;
+  }
+}
+
 TEST(Cli, AFolderHoldsOneRunAtATime) {
   const fs::path dir = temp_dir("twice");
   // The first run holds the folder for seconds; the second is refused with exit 2 and names it.

@@ -375,6 +375,10 @@ TEST(Redundancy, AssemblyThatTurnsABodyFarFromItsPoseIsSaid) {
   EXPECT_EQ(ws.warnings[1].rfind("body 'crank_", 0), 0u) << ws.warnings[1];
   EXPECT_NE(ws.warnings[1].find("assembly turned it 60 degrees from its given angle"), std::string::npos)
       << ws.warnings[1];
+  // Every crank turned, and each is named (only the one turned most was).
+  for (const char* c : {"'crank_0'", "'crank_1'", "'crank_2'"})
+    EXPECT_NE(ws.warnings[1].find(c), std::string::npos) << ws.warnings[1];
+  EXPECT_NE(ws.warnings[1].find(" 60 degrees)"), std::string::npos) << ws.warnings[1];
   // The exact loop starts where posed: no such warning.
   const Model exact = load_model_text(parallelogram_yaml(3, 1.0), "p3.yaml").model;
   Workspace we(exact);

@@ -209,3 +209,101 @@ TEST(Dopri5, EventFunctionsAreEvaluatedOncePerCheckedPointNotOncePerFunction) {
   EXPECT_LE(calls, 4 * steps + 1) << calls << " evaluations for " << steps << " steps";
   EXPECT_NEAR(y[0], std::cos(10.0), 1e-5);
 }
+
+TEST(Failure, APaceThatCannotReachTheEndStopsAtOnceNotAfterTheStepBudget) {
+  // y' = -1e9 (y - cos t) is stiff: DOPRI5's stability bound holds its step near 3e-9 s, so
+  // t = 1 s would take about 3e8 steps, beyond max_steps (5e7). It crept through the whole
+  // budget first (minutes); now it stops after one window of 100 000 steps, saying why. BDF
+  // takes the same problem in large steps.
+  OdeProblem p;
+  p.n = 1;
+  p.rhs = [](double t, const double* y, double* dy) {
+    dy[0] = -1e9 * (y[0] - std::cos(t));
+    return true;
+  };
+  for (auto make : {&make_dopri5, &make_cvode_bdf}) {
+    IntegratorOptions o;
+    o.rtol = 1e-6;
+    o.atol = 1e-9;
+    auto integ = make(p, o);
+    SCOPED_TRACE(integ->name());
+    Eigen::VectorXd y(1);
+    y << 1.0;
+    integ->reset(0, y);
+    const Advance a = integ->advance(1.0, y);
+    if (std::string(integ->name()) == "dopri5") {
+      ASSERT_EQ(a.kind, Advance::failure);
+      EXPECT_NE(a.message.find("stalled: the last 100000 steps advanced t by "), std::string::npos)
+          << a.message;
+      EXPECT_NE(a.message.find("than the 49900000 that solver.max_steps leaves"),
+                std::string::npos) << a.message;
+      EXPECT_EQ(integ->stats().steps, 100000);
+      EXPECT_LT(a.t, 1e-3);
+    } else {
+      ASSERT_EQ(a.kind, Advance::reached) << a.message;
+      EXPECT_NEAR(y[0], std::cos(1.0), 1e-5);
+      EXPECT_LT(integ->stats().steps, 10000);
+    }
+  }
+}
+
+TEST(Failure, AStallIsMeasuredAgainstTheRunsEnd) {
+  // The same stiff problem with a budget of 2e6 steps: t = 1e-3 s takes about 3e5 and is
+  // reached when the integrator knows no other goal; told that the run ends at 1 s (3e8 steps
+  // away at that pace), it stops after its first window.
+  OdeProblem p;
+  p.n = 1;
+  p.rhs = [](double t, const double* y, double* dy) {
+    dy[0] = -1e9 * (y[0] - std::cos(t));
+    return true;
+  };
+  for (const double end : {0.0, 1.0}) {
+    IntegratorOptions o;
+    o.rtol = 1e-6;
+    o.atol = 1e-9;
+    o.max_steps = 2'000'000;
+    o.end_time = end;
+    auto integ = make_dopri5(p, o);
+    Eigen::VectorXd y(1);
+    y << 1.0;
+    integ->reset(0, y);
+    const Advance a = integ->advance(1e-3, y);
+    if (end == 0.0) {
+      EXPECT_EQ(a.kind, Advance::reached) << a.message;
+      EXPECT_GT(integ->stats().steps, 200000);
+    } else {
+      ASSERT_EQ(a.kind, Advance::failure);
+      EXPECT_NE(a.message.find("at either pace t = 1 s is more steps away"), std::string::npos)
+          << a.message;
+      EXPECT_EQ(integ->stats().steps, 100000);
+    }
+  }
+}
+
+TEST(Failure, BdfCreepingAtADiscontinuityStopsAsStalled) {
+  // y' = -sign(y) chatters about y = 0 once it gets there (t = 1): CVODE's steps shrink to the
+  // absolute tolerance and it crept on toward t = 2 until max_steps. One-step mode (a step hook,
+  // as every simulation has) measures the pace in windows of max_steps / 10 steps; once the
+  // pace since t = 0 too puts t = 2 beyond the steps left (past half the budget), it stops.
+  OdeProblem p;
+  p.n = 1;
+  p.rhs = [](double, const double* y, double* dy) {
+    dy[0] = y[0] > 0 ? -1.0 : 1.0;
+    return true;
+  };
+  IntegratorOptions o;
+  o.rtol = 1e-8;
+  o.atol = 1e-12;
+  o.max_steps = 20'000;
+  auto integ = make_cvode_bdf(p, o);
+  integ->set_step_hook([](double, double) {});
+  Eigen::VectorXd y(1);
+  y << 1.0;
+  integ->reset(0, y);
+  const Advance a = integ->advance(2.0, y);
+  ASSERT_EQ(a.kind, Advance::failure);
+  EXPECT_NE(a.message.find("stalled: the last 2000 steps advanced t by "), std::string::npos)
+      << a.message;
+  EXPECT_NEAR(a.t, 1.0, 0.01);
+  EXPECT_NE(a.message.find("and all 12000 since t = 0 s"), std::string::npos) << a.message;
+}

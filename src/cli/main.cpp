@@ -156,7 +156,13 @@ int main(int argc, char** argv) {
   run->add_option("--channels", channels_opt,
                   "Write only these channels to the time series: comma-separated glob patterns, "
                   "e.g. 'slider.*,rod_slider.*' (time is always written; default: the model's "
-                  "solver.output_channels, else all)");
+                  "solver.output_channels, else all)")
+      ->check([](const std::string& list) {
+        return lash::split_channel_patterns(list).empty()
+                   ? std::string("names no channel pattern: give comma-separated patterns such "
+                                 "as 'slider.*,rod_slider.*', or leave out --channels")
+                   : std::string();
+      });
   run->add_option("--format", format_opt,
                   "Time series format: csv (timeseries.csv, 9 significant digits; the default) "
                   "or hdf5 (timeseries.h5, every double in full; default: the model's "

@@ -167,7 +167,7 @@ static void build_solver(const Model& model, Workspace& ws, const Eigen::MatrixX
         if (owner[i].driver)
           throw std::runtime_error(what + ": its equation is redundant with " + names +
                                    ": the motion it prescribes is already fixed; remove the "
-                                   "driver or one of those joints");
+                                   "driver or one of those");
         const int total = end - i, others = total - dropped;
         const std::string which =
             others == 0 ? (total == 1 ? "its equation is" : "all " + std::to_string(total) + " of its equations are")
@@ -683,6 +683,12 @@ bool reselect_redundant_rows(const Model& model, Workspace& ws) {
   ws.solver->rank_reference = rank_reference;  // the assembly's, not this instant's
   ws.warnings = warnings;
   return true;
+}
+
+RowElement constraint_row_element(const Model& model, const Workspace& ws, int row) {
+  const RowOwner o = row_owners(model, ws).at(static_cast<size_t>(row));
+  return {o.driver ? model.drivers[o.index].name : model.joints[o.index].name,
+          owner_name(model, o)};
 }
 
 }  // namespace lash

@@ -293,4 +293,11 @@ bool kept_rows_weak(Workspace& ws);
 /// is the one in use.
 bool reselect_redundant_rows(const Model& model, Workspace& ws);
 
+/// The joint or driver constraint row `row` belongs to: its name (`element`) and how messages
+/// name it (`what`: "joint 'a3'", "driver 'd'").
+struct RowElement {
+  std::string element, what;
+};
+RowElement constraint_row_element(const Model& model, const Workspace& ws, int row);
+
 }  // namespace lash

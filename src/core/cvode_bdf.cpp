@@ -171,6 +171,7 @@ class CvodeBdf final : public Integrator {
     // max_steps bounds the steps per output interval as CVodeSetMaxNumSteps does in CV_NORMAL
     // mode, where CVODE counts them; one step per call never reaches its count.
     long steps = 0;
+    stall_.begin(t_step_);
     for (;;) {
       if (root_pending_) {
         if (t_root_ <= t_out) {
@@ -217,6 +218,13 @@ class CvodeBdf final : public Integrator {
       }
       t_step_ = t1;
       if (hook_) hook_(t0, t1);
+      // max_steps counts the steps per output interval here, as CVODE does in CV_NORMAL mode.
+      if (std::string stalled = stall_.after_step(t0, t1, t_out, static_cast<double>(o_.max_steps - steps));
+          !stalled.empty()) {
+        last_error_ = stalled;
+        t_ret = t1;
+        return CV_TOO_MUCH_WORK;
+      }
       if (p_.project && t1 < t_out) {
         // A state moved onto the constraints (near a singular position) restarts CVODE there:
         // its history would carry the jump into the next steps' predictor and error test. Not
@@ -284,6 +292,7 @@ class CvodeBdf final : public Integrator {
 
   OdeProblem p_;
   IntegratorOptions o_;
+  StallCheck stall_{o_.max_steps};
   SUNContext ctx_ = nullptr;
   N_Vector y_ = nullptr;
   void* mem_ = nullptr;

@@ -81,6 +81,7 @@ class Dopri5 final : public Integrator {
         y = y_;
         return {Advance::stopped, t_, {}};
       }
+      t_out_ = t_out;
       if (auto fail = step(); !fail.empty()) return {Advance::failure, t_, fail};
     }
   }
@@ -174,7 +175,9 @@ class Dopri5 final : public Integrator {
         end_evaluated_ = false;
         if (p_.n_events > 0) p_.events(t_, y_.data(), g_old_.data());
       }
-      return "";
+      // max_steps counts the whole run: the goal is its end where it is known.
+      return stall_.after_step(t_old_, t_, std::max(t_out_, o_.end_time),
+                               static_cast<double>(o_.max_steps - stats_.steps));
     }
   }
 
@@ -326,6 +329,8 @@ class Dopri5 final : public Integrator {
   OdeProblem p_;
   IntegratorOptions o_;
   IntegratorStats stats_;
+  StallCheck stall_{o_.max_steps};
+  double t_out_ = 0.0;  ///< the time the running advance() goes to
   double t_ = 0.0, t_old_ = 0.0, h_ = 0.0, h_step_ = 0.0, t_event_ = 0.0;
   int event_k_ = -1;  ///< the event function of the pending event
   bool have_step_ = false, need_k1_ = true, pending_event_ = false, end_evaluated_ = false;

@@ -695,23 +695,29 @@ Eigen::VectorXd initial_state(const Model& model, Workspace& ws) {
   // warnings, which it sets anew). A loop that closes only approximately (a redundant joint's
   // pivot 1e-11 m off) is closed exactly only at isolated positions, and Newton's method goes
   // there: a double parallelogram posed at −30° started at −90°, silently.
-  int turned = -1;
-  double most = kAssemblyTurnWarning;
+  std::vector<std::pair<double, int>> turned;  // (angle, body), every one beyond the warning's
   Eigen::VectorXd given = Eigen::VectorXd::Zero(ws.ny);
   for (int b = 0; b < ws.nb; ++b) {
     const Body& body = model.bodies[b];
     if (body.type != BodyType::rigid) continue;
     kind_of(body).initial(body, given.data() + ws.blocks[b].offset, nullptr);
     const int k = ws.blocks[b].offset + 2;
-    if (std::abs(y[k] - given[k]) > most) most = std::abs(y[k] - given[k]), turned = b;
+    if (std::abs(y[k] - given[k]) > kAssemblyTurnWarning) turned.push_back({std::abs(y[k] - given[k]), b});
   }
-  if (turned >= 0) {
+  if (!turned.empty()) {
+    // The body turned most first, then the others (most turned first, in model order on ties).
+    std::stable_sort(turned.begin(), turned.end(),
+                     [](const auto& a, const auto& b) { return a.first > b.first; });
     std::ostringstream s;
     s.precision(3);
-    s << "body '" << model.bodies[turned].name << "': assembly turned it "
-      << most * 180.0 / M_PI << " degrees from its given angle to satisfy every joint and "
-      << "driver; check its markers and pose (a redundant joint whose markers close the loop "
-      << "only approximately is satisfied only at isolated positions)";
+    s << "body '" << model.bodies[turned[0].second].name << "': assembly turned it "
+      << turned[0].first * 180.0 / M_PI << " degrees from its given angle";
+    for (size_t i = 1; i < turned.size(); ++i)
+      s << (i == 1 ? " (and body '" : ", body '") << model.bodies[turned[i].second].name << "' "
+        << turned[i].first * 180.0 / M_PI << (i + 1 == turned.size() ? " degrees)" : "");
+    s << " to satisfy every joint and driver; check the markers and poses (a redundant joint "
+      << "whose markers close the loop only approximately is satisfied only at isolated "
+      << "positions)";
     ws.warnings.push_back(s.str());
   }
   return y;

@@ -172,6 +172,11 @@ inline constexpr double kStateTolerancePosition = 1e-6;
 /// A rigid body turned by assembly more than this from its given angle (rad, 10°) is warned of.
 inline constexpr double kAssemblyTurnWarning = 0.17453292519943295;
 inline constexpr double kStateToleranceVelocity = 1e-4;
+/// Largest constraint residual |Φ| (m or rad) a run may reach: beyond it the joints have come
+/// apart (a driver forcing a locked mechanism, a loop that does not close) and the run stops as
+/// failed, naming the joint or driver. A run holds its constraints to round-off or to the
+/// Baumgarte-bounded drift (1e-14 to 1e-6 on the examples and the singular-position tests).
+inline constexpr double kRunViolationLimit = 1e-3;
 
 /// Why y cannot be run at time t: a redundant driver or, with check_residual, constraint
 /// residuals beyond kStateTolerance*. "" when it can. Sets up ws's constraint solver at y

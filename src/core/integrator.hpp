@@ -3,7 +3,9 @@
 /// The integrator interface the simulation loop drives: advance to an output time, stopping
 /// early at a located event (an event function rising through zero).
 #include <Eigen/Core>
+#include <algorithm>
 #include <atomic>
+#include <cstdio>
 #include <functional>
 #include <memory>
 #include <string>
@@ -28,6 +30,58 @@ struct IntegratorOptions {
   double max_step = 0.0;    ///< 0: unlimited
   long max_steps = 50'000'000;
   double first_step = 0.0;  ///< 0: chosen automatically
+  /// The run's end (0: unknown): DOPRI5, whose max_steps counts the whole run, measures a
+  /// stall (StallCheck) against the steps left to reach it.
+  double end_time = 0.0;
+};
+
+/// A run whose pace cannot reach its goal within its step budget stops at once, not after the
+/// budget's steps (50 million by default: minutes to hours of creeping at a singular position,
+/// or DOPRI5 on a problem too stiff for it). At the end of every window of accepted steps
+/// (max_steps / 10, between 1 000 and 100 000), two paces are measured: the window's, and that
+/// of every step since the budget's count began (begin(); else the first step). When at both
+/// the goal lies more steps away than the budget leaves, the run has stalled. Both: a run whose
+/// last window went at a pace that would see it through goes on, and so does one whose pace
+/// since the start would (a legitimate crawl through a hard passage, such as stick-slip under
+/// DOPRI5, followed by its usual pace).
+class StallCheck {
+ public:
+  explicit StallCheck(long max_steps)
+      : window_(std::max(1000L, std::min(100'000L, max_steps / 10))) {}
+  /// Starts the count the budget is measured over at t (BDF: each output interval).
+  void begin(double t) {
+    origin_ = t;
+    total_ = 0;
+    in_window_ = 0;
+    begun_ = true;
+  }
+  /// After an accepted step [t0, t1]: "" or the failure message.
+  std::string after_step(double t0, double t1, double goal, double budget) {
+    if (!begun_) begin(t0);
+    if (in_window_ == 0) from_ = t0;
+    ++total_;
+    if (++in_window_ < window_) return "";
+    const long n = in_window_;
+    in_window_ = 0;
+    if (!(goal > t1)) return "";
+    // (goal − t1) / pace with pace = advanced / steps; no advance at all is an infinite need.
+    const double recent = (goal - t1) / (t1 - from_) * static_cast<double>(n),
+                 overall = (goal - t1) / (t1 - origin_) * static_cast<double>(total_);
+    if (!(recent > budget && overall > budget)) return "";
+    char msg[400];
+    std::snprintf(msg, sizeof msg,
+                  "stalled: the last %ld steps advanced t by %.3e s, to %.9g s, and all %ld "
+                  "since t = %.9g s by %.3e s; at either pace t = %.9g s is more steps away "
+                  "(%.3g, %.3g) than the %.0f that solver.max_steps leaves",
+                  n, t1 - from_, t1, total_, origin_, t1 - origin_, goal, recent, overall, budget);
+    return msg;
+  }
+
+ private:
+  long window_;
+  long in_window_ = 0, total_ = 0;
+  double from_ = 0.0, origin_ = 0.0;
+  bool begun_ = false;
 };
 
 struct IntegratorStats {

@@ -6,6 +6,7 @@
 #include <limits>
 #include <sstream>
 
+#include "core/constraint_solver.hpp"
 #include "core/elements/clearance_revolute.hpp"
 #include "core/elements/registry.hpp"
 
@@ -103,6 +104,21 @@ RunStatus through_bearing(const Model& model, const Workspace& ws, int k, double
     << " m (delta_dot = " << o.delta_dot << " m/s, Fn = " << o.f_n
     << " N); the contact is too soft for the load or the step too large";
   return {false, t, j.name, s.str()};
+}
+
+/// The joints no longer hold: |Φ| beyond kRunViolationLimit. The row worst off names the
+/// element. ws holds the evaluation at t.
+RunStatus pulled_apart(const Model& model, const Workspace& ws, double t) {
+  Eigen::Index row = 0;
+  const double worst = ws.phi.cwiseAbs().maxCoeff(&row);
+  const RowElement e = constraint_row_element(model, ws, static_cast<int>(row));
+  std::ostringstream s;
+  s << e.what << ": pulled apart: its constraint residual is " << worst << " (m or rad) at t = "
+    << t << " s, beyond the " << kRunViolationLimit
+    << " a run allows: the mechanism cannot follow its joints and drivers here (a driver "
+       "forcing a locked or singular position, a loop that does not close, a step too large "
+       "for the constraint stabilization)";
+  return {false, t, e.element, s.str()};
 }
 
 /// The dense output of the step being reported, evaluated into the run's workspace.
@@ -207,6 +223,7 @@ Simulator::Simulator(const Model& model, Workspace& ws, std::vector<SectionPlane
     return true;
   };
   IntegratorOptions opt{s.rtol, s.atol, s.max_step, s.max_steps};
+  opt.end_time = s.end_time;
   integrator_ = s.integrator == IntegratorKind::bdf ? make_cvode_bdf(problem, opt)
                                                     : make_dopri5(problem, opt);
   y_.resize(ws.ny);
@@ -577,6 +594,10 @@ RunResult simulate(const Model& model, Workspace& ws, Observer& observer,
     observer.output(t, y, ws);
     ++result.outputs;
     if (!finite) return false;
+    if (ws.constraint_violation > kRunViolationLimit) {
+      result.status = pulled_apart(model, ws, t);
+      return false;
+    }
     // The start state (a --from state or a continued run): the event function sees a journal
     // reach its radius during the run, not one that starts past it.
     if (t == t0)

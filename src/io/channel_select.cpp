@@ -22,6 +22,26 @@ std::vector<std::string> split_channel_patterns(const std::string& list) {
   return out;
 }
 
+namespace {
+
+/// Whether every `[` of a glob opens a set that a `]` closes (a `]` first in the set, after an
+/// optional `!` or `^`, is one of its characters): fnmatch takes an unclosed `[` as itself, so
+/// `[a-` would match no channel and be reported as a name not found.
+bool sets_closed(const std::string& p) {
+  for (size_t i = 0; i < p.size(); ++i) {
+    if (p[i] != '[') continue;
+    size_t j = i + 1;
+    if (j < p.size() && (p[j] == '!' || p[j] == '^')) ++j;
+    if (j < p.size() && p[j] == ']') ++j;
+    j = p.find(']', j);
+    if (j == std::string::npos) return false;
+    i = j;
+  }
+  return true;
+}
+
+}  // namespace
+
 std::vector<std::size_t> select_channels(const std::vector<ChannelInfo>& channels,
                                          const std::vector<std::string>& patterns) {
   std::vector<std::size_t> picked;
@@ -31,6 +51,9 @@ std::vector<std::size_t> select_channels(const std::vector<ChannelInfo>& channel
   }
   std::vector<char> selected(channels.size(), 0);
   for (const auto& p : patterns) {
+    if (!sets_closed(p))
+      throw std::invalid_argument("channel pattern '" + p +
+                                  "': a '[' opens a set of characters that no ']' closes");
     bool any = p == "time";  // always written; naming it is not an error
     for (std::size_t i = 0; i < channels.size(); ++i)
       if (fnmatch(p.c_str(), channels[i].name.c_str(), 0) == 0) selected[i] = 1, any = true;
