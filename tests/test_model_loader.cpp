@@ -569,6 +569,17 @@ TEST(ModelLoader, RelativeToleranceIsOneTheErrorControlCanHonour) {
   EXPECT_TRUE(problems(kGood, {"solver.rtol=1e-14"}).empty());
 }
 
+TEST(ModelLoader, AbsoluteToleranceIsOneTheErrorControlCanHonour) {
+  // atol 1e-300 and 1e-20 were accepted and the run stopped at t = 0 ("step size underflow").
+  for (const char* bad : {"solver.atol=1e-300", "solver.atol=1e-20", "solver.atol=0", "solver.atol=2"}) {
+    auto d = problems(kGood, {bad});
+    ASSERT_EQ(d.size(), 1u) << bad;
+    EXPECT_NE(d[0].message.find("atol must be in [1e-18, 1]"), std::string::npos) << d[0].message;
+  }
+  EXPECT_TRUE(problems(kGood, {"solver.atol=1e-18"}).empty());
+  EXPECT_TRUE(problems(kGood, {"solver.atol=1"}).empty());
+}
+
 TEST(ModelLoader, OnlyRegularFilesOfBoundedSizeAreRead) {
   try {
     load_model_file("/dev/zero");

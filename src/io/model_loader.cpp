@@ -176,6 +176,13 @@ std::string relative_tolerance(double v) {
   return v >= 1e-14 && v <= 0.1 ? "" : "in [1e-14, 0.1] (1e-6 to 1e-10 is usual)";
 }
 
+/// Below 1e-18 the error test of a state that starts at zero (an energy account, a coordinate
+/// on an axis) sees only round-off: the Flores example stopped at t = 0 with atol 1e-20 and
+/// 1e-300 ("step size underflow"), and took 80 000 steps at 1e-18 against 4 300 at 1e-11.
+std::string absolute_tolerance(double v) {
+  return v >= 1e-18 && v <= 1.0 ? "" : "in [1e-18, 1] (1e-9 to 1e-12 is usual, in SI units)";
+}
+
 class Loader {
  public:
   Loader(const std::string& file) { r_.file = file; }
@@ -1002,7 +1009,7 @@ class Loader {
                  "unknown integrator '" + *integ + "', expected one of: dopri5, bdf");
     }
     st.rtol = s.number("rtol", "", relative_tolerance).value_or(st.rtol);
-    st.atol = s.number("atol", "", positive).value_or(st.atol);
+    st.atol = s.number("atol", "", absolute_tolerance).value_or(st.atol);
     st.end_time = s.required_number("end_time", " (s)", positive, 1.0);
     st.output_interval = s.number("output_interval", " (s)", positive).value_or(st.end_time / 1000);
     st.max_step = s.number("max_step", " (s)", non_negative).value_or(0.0);
