@@ -772,7 +772,7 @@ TEST(Cli, AnEmptyOutputFolderIsRefused) {
   // `-o ""` (an unset shell variable) wrote into out/<model name> without a word.
   const fs::path dir = temp_dir("empty_o");
   fs::create_directories(dir);
-  for (const std::string cmd : {"run " + example(), std::string("sweep study.yaml")}) {
+  for (const std::string& cmd : {"run " + example(), std::string("sweep study.yaml")}) {
     const Result r = run_lash_raw("cd '" + dir.string() + "' && " + std::string(LASH_BINARY) + " " +
                                   cmd + " -q -o ''");
     EXPECT_EQ(r.code, 2) << cmd << "\n" << r.out;
@@ -1392,7 +1392,9 @@ TEST(Cli, AnHdf5FileThatCannotGrowKeepsItsChunksAndCloses) {
     const auto cols = read_h5(dir / "timeseries.h5", names);
     ASSERT_EQ(cols.size(), names.size());
     for (const auto& [n, c] : cols) EXPECT_EQ(static_cast<long>(c.values.size()), chunks * 4096) << n;
-    if (chunks > 0) EXPECT_NEAR(cols.at("time").values.back(), (chunks * 4096 - 1) * 1e-5, 1e-12);
+    if (chunks > 0) {
+      EXPECT_NEAR(cols.at("time").values.back(), (chunks * 4096 - 1) * 1e-5, 1e-12);
+    }
     fs::remove_all(dir);
   }
 }

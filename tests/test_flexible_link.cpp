@@ -358,7 +358,9 @@ TEST(FlexibleLink, ABushingInTheLinksAxesKeepsTheEnergyBalance) {
     for (double v : (*r.rec)["mount.dy"]) dy = std::max(dy, std::abs(v));
     EXPECT_GT(dx, 1e-4);
     EXPECT_GT(dy, 1e-4);
-    if (c > 0) EXPECT_GT((*r.rec)["energy.dissipated"].back(), 1e-3 * scale);
+    if (c > 0) {
+      EXPECT_GT((*r.rec)["energy.dissipated"].back(), 1e-3 * scale);
+    }
   }
 }
 

@@ -506,7 +506,9 @@ TEST(ModelLoader, DuplicateKeysAndNamesAreErrorsWithBothPlaces) {
                         "and each element name may appear once in a map");
   EXPECT_EQ(d[1].line, 4);
   EXPECT_NE(d[1].message.find("duplicate key 'name' (first at line 1, column 1)"), std::string::npos);
-  if (d.size() > 2) EXPECT_EQ(d[2].message.find("duplicate key"), std::string::npos) << d[2].str();
+  if (d.size() > 2) {
+    EXPECT_EQ(d[2].message.find("duplicate key"), std::string::npos) << d[2].str();
+  }
 }
 
 TEST(ModelLoader, TextMustBeUtf8AndOneDocument) {
