@@ -493,6 +493,33 @@ TEST(Singular, AFastDrivenParallelogramKeepsItsBranchWithBothIntegrators) {
   }
 }
 
+TEST(Singular, ADriversTorqueThroughTheInLinePositionIsThePowerTheMotionNeeds) {
+  // The unit parallelogram driven at a constant 60 rpm: its kinetic energy is constant, so the
+  // driver's power is the potential energy's rate, τ = dV/dφ = (2 · 1 kg · g · 0.5 m + 2 kg · g
+  // · 1 m) cos φ = 29.43 N·m · cos φ. At the outputs within 5e-4 rad of in line (φ = 0 and π)
+  // the reported torque was half of that (14.715 N·m): the multipliers reported there are the
+  // smallest with the same Φ_qᵀλ, and the near self-stress estimated for it carried a driver
+  // share. Now the drivers are left out of that minimisation.
+  std::string text = parallelogram_yaml(2, 1.0);
+  text += "drivers: {motor: {joint: pivot_0, speed_rpm: 60}}\n";
+  for (const char* integrator : {"dopri5", "bdf"}) {
+    SCOPED_TRACE(integrator);
+    const SimRun r = run_text(text, {"solver.end_time=1.0", "solver.output_interval=1e-4",
+                                     std::string("solver.integrator=") + integrator});
+    ASSERT_TRUE(r.result.status.ok) << r.result.status.message;
+    const double g = 9.81, k = (2 * 1.0 * 0.5 + 2.0 * 1.0) * g;
+    double worst = 0, near_in_line = 1.0;
+    for (size_t i = 0; i < r.rec->time.size(); ++i) {
+      const double phi = (*r.rec)["crank_0.phi"][i];
+      near_in_line = std::min(near_in_line, std::abs(std::sin(phi)));
+      worst = std::max(worst, std::abs((*r.rec)["motor.torque"][i] - k * std::cos(phi)));
+    }
+    EXPECT_LT(near_in_line, 5e-4);  // the run has outputs inside the window
+    // Measured 1.2e-3 N·m (DOPRI5) and 0.057 N·m (BDF, at the outputs in the window), of 29.43.
+    EXPECT_LT(worst, std::string(integrator) == "bdf" ? 0.2 : 1e-2) << "N·m";
+  }
+}
+
 TEST(Singular, BodiesOfVeryDifferentMassAreNotTakenForASingularPosition) {
   // A Grashof crank-rocker, never near a singular position, with 1e-8 kg cranks on a 1 kg
   // coupler. With the floor relative to W_aa (which the light bodies' 1/m dominate) its rows

@@ -599,7 +599,8 @@ void smallest_multipliers(Workspace& ws) {
   // solve amplifies Baumgarte's terms and round-off by 1/pivot (a parallelogram's pivots, about
   // 23.6 N through its in-line position, peaked at 220 N within 1e-3 rad of it): per weak row a,
   // the multipliers of the solution with right-hand side e_a (inverse iteration: 1/d_a times
-  // that set, up to O(1)), scaled to unit length, are one more column of N.
+  // that set, up to O(1)), with the drivers' entries left out and scaled to unit length, are
+  // one more column of N.
   const int nd = static_cast<int>(s.dropped.size()), nw = static_cast<int>(s.weak.size());
   if (s.null_basis.cols() != nd + nw) s.null_basis.resize(ws.m, nd + nw);  // near singular only
   for (int j = 0; j < nd; ++j) {
@@ -618,6 +619,10 @@ void smallest_multipliers(Workspace& ws) {
     auto col = s.null_basis.col(nd + j);
     col.setZero();
     for (int a = 0; a < ma; ++a) col[s.active[a]] = s.null_work[s.pos[nq + a]];
+    // Without the drivers' entries: the driver's multiplier is the power the motion needs
+    // (τω), which the self-stress carries none of in the limit; the estimate's share of it
+    // took half a driven parallelogram's torque at its in-line position (14.7 of 29.43 N·m).
+    for (const int r : ws.row_of_driver) col[r] = 0.0;
     const double norm = col.norm();
     if (!(norm > 0.0) || !std::isfinite(norm)) return;  // λ as solved
     col /= norm;
