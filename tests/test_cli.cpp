@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "io/files.hpp"
 #include "test_support.hpp"
 
 namespace fs = std::filesystem;
@@ -626,6 +627,52 @@ TEST(Cli, RunContinuesFromASavedStateTimeAndAll) {
 }
 
 
+TEST(Cli, TheFiguresProgramReadsTheWholeResultsAndStopsWithTheRun) {
+  // lash finds its figures program at ../share/lash/lash_figures.py beside its binary: a copy of
+  // lash with a stand-in there that reports what it found in the run folder, then waits.
+  const fs::path dir = temp_dir("figures_order");
+  fs::create_directories(dir / "bin");
+  fs::create_directories(dir / "share" / "lash");
+  fs::copy_file(LASH_BINARY, dir / "bin" / "lash");
+  std::ofstream(dir / "share" / "lash" / "lash_figures.py")
+      << "import os, sys, time\n"
+         "d = sys.argv[1]\n"
+         "rows = sum(1 for _ in open(os.path.join(d, 'timeseries.csv'))) - 1\n"
+         "print('rows', rows, 'final_state', os.path.exists(os.path.join(d, 'final_state.json')))\n"
+         "sys.stdout.flush()\n"
+         "if os.environ.get('LASH_TEST_FIGURES_WAIT'):\n"
+         "    open(os.path.join(d, 'figures', 'started'), 'w').close()\n"
+         "    time.sleep(300)\n";
+  const std::string lash = (dir / "bin" / "lash").string();
+  const fs::path out = dir / "out";
+  // The time series is whole (every row summary.json counts) and final_state.json written
+  // before the figures program starts: it draws the whole run.
+  const Result r = run_lash_raw(lash + " run " + example() + " -q --report -o " + out.string() +
+                                " --set solver.end_time=0.002");
+  ASSERT_EQ(r.code, 0) << r.out;
+  const long long rows = read_summary(out)["output"]["rows"].get<long long>();
+  EXPECT_GT(rows, 100);
+  EXPECT_EQ(lash::test::read_file((out / "figures.log").string()),
+            "rows " + std::to_string(rows) + " final_state True\n");
+  // A signal while the figures are drawn: the program is stopped with lash, at once (it would
+  // wait 300 s), and none is left writing into the folder.
+  const Result s = run_lash_raw(
+      "LASH_TEST_FIGURES_WAIT=1 " + lash + " run " + example() + " -q --report -o " + out.string() +
+      " --set solver.end_time=0.002 & pid=$!; i=0; while [ ! -e " + (out / "figures" / "started").string() +
+      " ] && [ $i -lt 3000 ]; do sleep 0.1; i=$((i+1)); done; t0=$(date +%s%N); kill -TERM $pid; "
+      "wait $pid; echo \"rc=$? ms=$(( ($(date +%s%N) - t0) / 1000000 ))\"");
+  EXPECT_NE(s.out.find("rc=130 "), std::string::npos) << s.out;
+  const size_t ms = s.out.find("ms=");
+  ASSERT_NE(ms, std::string::npos) << s.out;
+  EXPECT_LT(std::stol(s.out.substr(ms + 3)), 1000 * (lash::kKillGraceSeconds + 3)) << s.out;
+  // ("[s]hare": the pattern does not match the shell that runs pgrep.)
+  const Result left = run_lash_raw("pgrep -f '" + dir.string() + "/[s]hare' || echo none");
+  EXPECT_NE(left.out.find("none"), std::string::npos) << left.out;
+  EXPECT_EQ(read_summary(out)["status"]["outcome"], "interrupted");
+  EXPECT_FALSE(fs::exists(out / "report.html"));  // no half report beside the results
+  fs::remove_all(dir);
+}
+
 TEST(Cli, ASignalStopsTheRunAndKeepsSummaryAndState) {
   // (timeout --foreground: one signal to lash only; without it timeout signals the whole process
   // group too, and a second signal ends lash at once, by design.)
@@ -710,6 +757,29 @@ TEST(Cli, AWriteErrorStopsTheRunWithExitThreeAndWholeRows) {
   const Result dev = run_lash("run " + example() + " -q -o /dev/full");
   EXPECT_EQ(dev.code, 3) << dev.out;
   EXPECT_NE(dev.out.find("/dev/full: cannot create the output folder"), std::string::npos) << dev.out;
+  // A limit below summary.json's size (18 blocks): no summary can be written, and the rows are
+  // kept (a file-size limit is per file: removing rows would make no room for it). They were
+  // all removed, for nothing.
+  fs::remove_all(dir);
+  const Result small = run_lash_raw("ulimit -f 18; " + std::string(LASH_BINARY) + " run " + example() +
+                                    " -q -o " + dir.string() + " --set solver.end_time=0.1");
+  EXPECT_EQ(small.code, 3) << small.out;
+  EXPECT_NE(small.out.find("summary.json: cannot write: File too large"), std::string::npos) << small.out;
+  EXPECT_FALSE(fs::exists(dir / "summary.json"));
+  expect_whole_rows(dir / "timeseries.csv");
+  EXPECT_GT(line_count(dir / "timeseries.csv"), 10u);
+  fs::remove_all(dir);
+}
+
+TEST(Cli, AClosedPipeOnStdoutIsNotTheEndOfARun) {
+  // `lash run ... | head -0`: the closing line cannot be written; the run's files are whole and
+  // it exits 0, not 141 (SIGPIPE), so a script with `set -o pipefail` sees a good run.
+  const fs::path dir = temp_dir("pipe");
+  const Result r = run_lash_raw("bash -c 'set -o pipefail; " + std::string(LASH_BINARY) + " run " +
+                                example() + " -o " + dir.string() +
+                                " --set solver.end_time=0.002 | head -c 0; echo rc=$?'");
+  EXPECT_NE(r.out.find("rc=0"), std::string::npos) << r.out;
+  EXPECT_EQ(read_summary(dir)["status"]["outcome"], "completed");
   fs::remove_all(dir);
 }
 

@@ -242,6 +242,14 @@ TEST(RunFolder, NonFiniteTimesAndFilesThatAreNotRegularAreRefused) {
     std::ofstream(dir / "events.csv") << e;
     expect_refused("events.csv:2:1: time '" + bad + "' is not a finite number");
     std::ofstream(dir / "events.csv") << events;
+    // And in a value: statistics of a column holding one would be null, not refused.
+    c = csv;
+    const size_t field2 = c.find(',', row3) + 1;
+    c.replace(field2, c.find(',', field2) - field2, bad);
+    std::ofstream(dir / "timeseries.csv") << c;
+    expect_refused("timeseries.csv:4:" + std::to_string(field2 - row3 + 1) + ": '" + bad +
+                   "' is not a finite number");
+    std::ofstream(dir / "timeseries.csv") << csv;
   }
   // A link to /dev/zero would be read for ever: refused at once (ctest's time-out would end a
   // hang).

@@ -272,6 +272,8 @@ int main(int argc, char** argv) {
   // Past a file-size limit (ulimit -f) a write then fails with EFBIG and is reported (exit 3)
   // instead of the process being killed with a half-written row.
   ::signal(SIGXFSZ, SIG_IGN);
+  // A closed pipe on stdout (`lash run ... | head`) is a failed write, not the end of the run.
+  ::signal(SIGPIPE, SIG_IGN);
   if (tune_absorber.parsed()) return tune_absorber.run(std::cout, std::cerr);
   if (sweep.parsed()) return sweep.run(g_interrupt, install_signal_handlers);
 
@@ -404,7 +406,7 @@ int main(int argc, char** argv) {
         std::cerr << "the run stopped at t = " << ra.result.status.t
                   << " s: " << ra.result.status.message << "\n";
       if (*report) {
-        for (const auto& line : lash::write_report(data, run_dir)) std::cout << line << "\n";
+        for (const auto& line : lash::write_report(data, run_dir, &g_interrupt)) std::cout << line << "\n";
         if (const int sig = g_interrupt.load(); sig != 0) {  // during the figures
           std::cerr << "\ninterrupted by signal " << sig
                     << " while the figures were drawn; report.html and report_data.json are "
@@ -587,16 +589,17 @@ int main(int argc, char** argv) {
   for (const auto& w : result.warnings) std::cerr << model_path << ": warning: " << w << "\n";
   if (!result.warnings.empty()) writer->add_to_summary("warnings", result.warnings);
 
-  // The report first, summary.json last: a folder with a summary holds everything it promises.
-  // The report covers what was computed, up to a failure too (not after a signal or a write
-  // error).
+  // The results on disk whole first (the figures read timeseries.csv), then the report, then
+  // summary.json: a folder with a summary holds everything it promises. The report covers what
+  // was computed, up to a failure too (not after a signal or a write error).
+  writer->close_files(result);
   std::vector<std::string> report_notes;
   bool report_failed = false;
   const auto outcome = result.status.outcome;
   if (with_report && g_interrupt.load() == 0 && writer->stop_reason().empty() &&
       (outcome == lash::RunOutcome::completed || outcome == lash::RunOutcome::failed)) {
     try {
-      report_notes = lash::write_report(lash::report_data(model, ra), out_dir);
+      report_notes = lash::write_report(lash::report_data(model, ra), out_dir, &g_interrupt);
       if (g_interrupt.load() != 0) {  // during the figures: no half report beside the results
         lash::remove_report(out_dir);
         report_notes.clear();
@@ -616,7 +619,16 @@ int main(int argc, char** argv) {
   }
   lash::RunStatus status;
   try {
-    status = writer->finish(result);
+    try {
+      status = writer->finish(result);
+    } catch (const lash::IoError&) {
+      // No room for the summary: the report, optional, gives way to it.
+      if (!with_report || report_notes.empty() || report_failed) throw;
+      lash::remove_report(out_dir);
+      report_notes = {"removed: no room for summary.json beside it"};
+      report_failed = true;
+      status = writer->finish(result);
+    }
   } catch (const std::exception& e) {  // summary.json itself
     std::cerr << "\nerror: " << e.what() << "\nthe run " << ended(result.status.outcome)
               << " at t = " << result.status.t << " s, but its summary could not be written\n";

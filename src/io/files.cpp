@@ -1,6 +1,7 @@
 #include "io/files.hpp"
 
 #include <fcntl.h>
+#include <signal.h>
 #include <spawn.h>
 #include <sys/file.h>
 #include <sys/stat.h>
@@ -12,6 +13,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <ctime>
 #include <filesystem>
 
 extern char** environ;
@@ -57,20 +59,23 @@ void sync_parent(const std::string& path) {
 
 }  // namespace
 
-IoError::IoError(const std::string& path, const std::string& what)
-    : std::runtime_error(path + ": " + what), path_(path) {}
+IoError::IoError(const std::string& path, const std::string& what, int error_number)
+    : std::runtime_error(path + ": " + what), path_(path), error_number_(error_number) {}
 
 void write_file_atomic(const std::string& path, std::string_view text) {
   const std::string tmp = path + ".tmp-" + std::to_string(::getpid());
   const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) throw IoError(path, "cannot write: " + errno_text(errno));
+  if (fd < 0) {
+    const int err = errno;
+    throw IoError(path, "cannot write: " + errno_text(err), err);
+  }
   int err = write_all(fd, text.data(), text.size());
   if (err == 0 && ::fsync(fd) != 0) err = errno;
   if (::close(fd) != 0 && err == 0) err = errno;
   if (err == 0 && ::rename(tmp.c_str(), path.c_str()) != 0) err = errno;
   if (err != 0) {
     ::unlink(tmp.c_str());
-    throw IoError(path, "cannot write: " + errno_text(err));
+    throw IoError(path, "cannot write: " + errno_text(err), err);
   }
   sync_parent(path);
 }
@@ -119,7 +124,7 @@ void RowFile::flush() {
     ::lseek(fd_, committed_, SEEK_SET);
     buffer_.clear();
     throw IoError(path_, "write failed after " + std::to_string(committed_) +
-                             " bytes: " + errno_text(err));
+                             " bytes: " + errno_text(err), err);
   }
   committed_ += static_cast<long long>(buffer_.size());
   committed_rows_ += std::count(buffer_.begin(), buffer_.end(), '\n');
@@ -303,7 +308,8 @@ std::string read_input_file(const std::string& path, std::size_t max_bytes) {
   return text;
 }
 
-int run_program(const std::vector<std::string>& argv, const std::string& log_path) {
+int run_program(const std::vector<std::string>& argv, const std::string& log_path,
+                const std::atomic<int>* interrupt) {
   if (argv.empty()) return -1;
   posix_spawn_file_actions_t actions;
   posix_spawn_file_actions_init(&actions);
@@ -318,8 +324,27 @@ int run_program(const std::vector<std::string>& argv, const std::string& log_pat
   posix_spawn_file_actions_destroy(&actions);
   if (rc != 0) return -1;
   int status = 0;
-  while (::waitpid(pid, &status, 0) < 0)
-    if (errno != EINTR) return -1;
+  if (interrupt) {
+    // Polled every 10 ms: the signal handler only stores the signal.
+    const int kill_ticks = static_cast<int>(kKillGraceSeconds * 100);
+    int ticks = -1;  // since SIGTERM was sent; −1 before
+    for (;;) {
+      const pid_t w = ::waitpid(pid, &status, WNOHANG);
+      if (w == pid) break;
+      if (w < 0 && errno != EINTR) return -1;
+      if (ticks < 0 && interrupt->load() != 0) {
+        ::kill(pid, SIGTERM);
+        ticks = 0;
+      } else if (ticks >= 0 && ++ticks == kill_ticks) {
+        ::kill(pid, SIGKILL);
+      }
+      const struct timespec tick {0, 10'000'000};
+      ::nanosleep(&tick, nullptr);
+    }
+  } else {
+    while (::waitpid(pid, &status, 0) < 0)
+      if (errno != EINTR) return -1;
+  }
   if (WIFEXITED(status)) return WEXITSTATUS(status);
   if (WIFSIGNALED(status)) return 128 + WTERMSIG(status);
   return -1;

@@ -3,6 +3,7 @@
 /// File-system primitives that never report success for a failed write: atomic whole-file
 /// writes, an append-only row file that keeps whole rows on a failed write, a run folder owned
 /// by one process, bounded reads of input files, and helper programs started without a shell.
+#include <atomic>
 #include <cstddef>
 #include <stdexcept>
 #include <string>
@@ -14,11 +15,14 @@ namespace lash {
 /// A failed read or write, with the path and the system's reason ("No space left on device").
 class IoError : public std::runtime_error {
  public:
-  IoError(const std::string& path, const std::string& what);
+  IoError(const std::string& path, const std::string& what, int error_number = 0);
   const std::string& path() const { return path_; }
+  /// The system's errno behind it (ENOSPC, EFBIG, ...), 0 if none.
+  int error_number() const { return error_number_; }
 
  private:
   std::string path_;
+  int error_number_ = 0;
 };
 
 /// Writes `text` to `path` atomically: a temporary file beside it, written, fsync'ed and renamed
@@ -114,7 +118,13 @@ constexpr std::size_t kMaxModelFileBytes = 16u << 20;
 
 /// Runs `argv[0]` (a path) with arguments `argv`, no shell involved, its stdout and stderr into
 /// `log_path`, and waits for it. Returns its exit status (128 + signal if it was killed), or -1
-/// when it could not be started.
-int run_program(const std::vector<std::string>& argv, const std::string& log_path);
+/// when it could not be started. With `interrupt`: once it is non-zero (a signal asked lash to
+/// stop), the program gets SIGTERM at once (SIGKILL if still there after kKillGraceSeconds), so
+/// no helper goes on writing into a folder lash has given up.
+int run_program(const std::vector<std::string>& argv, const std::string& log_path,
+                const std::atomic<int>* interrupt = nullptr);
+
+/// How long a helper program stopped by run_program's interrupt may take to end (seconds).
+constexpr double kKillGraceSeconds = 2.0;
 
 }  // namespace lash

@@ -309,7 +309,8 @@ json report_data(const Model& model, const RunAnalysis& a) {
   return d;
 }
 
-std::vector<std::string> write_report(const json& data, const std::string& folder) {
+std::vector<std::string> write_report(const json& data, const std::string& folder,
+                                      const std::atomic<int>* interrupt) {
   namespace fs = std::filesystem;
   std::vector<std::string> notes;
   std::error_code ec;
@@ -355,7 +356,8 @@ std::vector<std::string> write_report(const json& data, const std::string& folde
   if (ec) throw IoError(figures, "cannot create the folder: " + ec.message());
   write_file_atomic(figures + "/" + kFiguresMarker,
                     "written by lash report; removed with this folder by the next run\n");
-  const int rc = run_program({python, script, fs::absolute(folder).string()}, folder + "/figures.log");
+  const int rc = run_program({python, script, fs::absolute(folder).string()}, folder + "/figures.log",
+                              interrupt);
   notes.push_back(rc == 0 ? "wrote " + figures + "/ (see figures.log)"
                           : "figures failed (exit " + std::to_string(rc) + "), see " + folder +
                                 "/figures.log");

@@ -3,6 +3,7 @@
 /// The report of a run with its analyses (study/run_analysis.hpp): report_data.json
 /// (docs/report-data.md), the self-contained report.html and the figures drawn by
 /// tools/lash_figures.py. Nothing here runs a simulation.
+#include <atomic>
 #include <nlohmann/json.hpp>
 
 #include <string>
@@ -23,7 +24,9 @@ nlohmann::json report_data(const Model& model, const RunAnalysis& analysis);
 /// present, figures/*.png|svg into `folder` (an earlier report's figures/ is replaced; a figures/
 /// folder lash did not write is left alone: std::invalid_argument). Returns lines describing
 /// what was written or why a part was skipped; throws IoError when a file cannot be written.
-std::vector<std::string> write_report(const nlohmann::json& data, const std::string& folder);
+/// `interrupt` (a signal's number once one arrived) stops the figures' program early.
+std::vector<std::string> write_report(const nlohmann::json& data, const std::string& folder,
+                                      const std::atomic<int>* interrupt = nullptr);
 
 /// Removes what write_report wrote into `folder` (report_data.json, report.html, figures.log and
 /// a figures/ folder carrying lash's mark): a report cut short by a signal is not left beside the

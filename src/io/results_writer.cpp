@@ -5,6 +5,7 @@
 
 #include <fmt/format.h>
 
+#include <cerrno>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -141,9 +142,9 @@ void ResultsWriter::event(const ContactEvent& e, const Workspace& ws) {
   }
 }
 
-RunStatus ResultsWriter::finish(const RunResult& r) {
-  using nlohmann::json;
-  RunStatus status = r.status;
+void ResultsWriter::close_files(const RunResult& r) {
+  if (files_closed_) return;
+  files_closed_ = true;
   for (RowFile* f : {&ts_, &ev_}) {  // each keeps its whole rows, whatever the other's fate
     try {
       f->close();
@@ -159,6 +160,19 @@ RunStatus ResultsWriter::finish(const RunResult& r) {
       h5_->abandon();
     }
   }
+  if (r.final_state.y.size() > 0) {
+    try {
+      write_state(folder_ + "/final_state.json", model_, Workspace(model_), r.final_state);
+    } catch (const std::exception& e) {
+      if (write_error_.empty()) write_error_ = e.what();
+    }
+  }
+}
+
+RunStatus ResultsWriter::finish(const RunResult& r) {
+  using nlohmann::json;
+  close_files(r);
+  RunStatus status = r.status;
   // Rows of the time series on disk (the CSV's header is not one), and the last one's time.
   const long long series_rows = h5_ ? h5_->rows_written() : std::max(0LL, ts_.rows_written() - 1);
   auto last_time_on_disk = [&] {
@@ -168,13 +182,6 @@ RunStatus ResultsWriter::finish(const RunResult& r) {
   };
   last_row_time_ = last_time_on_disk();
   auto time_or_null = [](double t) { return std::isnan(t) ? nlohmann::json() : nlohmann::json(t); };
-  if (r.final_state.y.size() > 0) {
-    try {
-      write_state(folder_ + "/final_state.json", model_, Workspace(model_), r.final_state);
-    } catch (const std::exception& e) {
-      if (write_error_.empty()) write_error_ = e.what();
-    }
-  }
   if (!write_error_.empty() && status.outcome != RunOutcome::write_error) {
     // The run itself may have ended well or not; the results on disk are incomplete either way.
     const std::string before = status.ok ? std::string() : " (the run had stopped: " + status.message + ")";
@@ -264,8 +271,10 @@ RunStatus ResultsWriter::finish(const RunResult& r) {
   auto text = [&] { return j.dump(2, ' ', false, json::error_handler_t::replace) + "\n"; };
   try {
     write_file_atomic(folder_ + "/summary.json", text());
-  } catch (const IoError&) {
-    if (write_error_.empty() || h5_) throw;  // rows are given up only from a CSV
+  } catch (const IoError& e) {
+    // Rows are given up only from a CSV, and only for room on a full disk.
+    if (write_error_.empty() || h5_ || !(e.error_number() == ENOSPC || e.error_number() == EDQUOT))
+      throw;
     // The disk is full of rows: give up the last of them so the summary saying what the others
     // are fits (twice its size, for the temporary copy and the file system's blocks).
     const long long dropped = drop_last_rows(folder_ + "/timeseries.csv", 2 * text().size() + 8192);

@@ -53,10 +53,16 @@ class ResultsWriter : public Observer {
   /// none). Below the run's last output time when a write failed.
   double last_row_time() const { return last_row_time_; }
 
-  /// Closes the CSV files, writes final_state.json and, last and atomically, summary.json (with
-  /// every channel's unit and description). Returns the run's status as recorded: `result`'s,
-  /// or write_error if a write failed. Throws IoError only when summary.json itself cannot be
-  /// written.
+  /// Closes the time series and the events (their last rows reach the disk) and writes
+  /// final_state.json: before anything reads them (the report's figures). A failure is recorded
+  /// (stop_reason) for finish to report. Only the first call does anything.
+  void close_files(const RunResult& result);
+
+  /// close_files, then, last and atomically, summary.json (with every channel's unit and
+  /// description). Returns the run's status as recorded: `result`'s, or write_error if a write
+  /// failed. Throws IoError only when summary.json itself cannot be written; then, on a full
+  /// disk (ENOSPC, EDQUOT), the last rows of the CSV make room for it first (not for a file-size
+  /// limit, EFBIG: that is per file). May be called again after it threw.
   RunStatus finish(const RunResult& result);
 
   /// Adds `key` (e.g. "verdict" of a run analysed as it ran) to summary.json.
@@ -100,6 +106,7 @@ class ResultsWriter : public Observer {
   std::vector<JointStats> joints_;
   long rows_ = 0;
   double t_first_ = 0.0, t_last_ = 0.0;
+  bool files_closed_ = false;
 };
 
 }  // namespace lash

@@ -110,6 +110,10 @@ struct CsvRows {
       if (!parse_number(s.data() + a, s.data() + i, v))
         damaged(where + ":" + std::to_string(a + 1) + ": '" + s.substr(a, i - a) +
                 "' is not a number");
+      // A run writes finite values only (a non-finite one stops it); the time is checked below.
+      if (col > 0 && !std::isfinite(v))
+        damaged(where + ":" + std::to_string(a + 1) + ": '" + s.substr(a, i - a) +
+                "' is not a finite number (a run stops before it would write one)");
       if (col == 0) t = v;
       else values[col - 1] = v;
       ++col;
@@ -296,13 +300,20 @@ RecordedRun read_run_folder(const std::string& dir, const Model& model) {
     auto row = std::make_shared<long long>(0);
     auto t_last = std::make_shared<double>(-std::numeric_limits<double>::infinity());
     const std::string where = run.series_file;
-    run.next_row = [h5, row, t_last, where](double& t, double* v) {
+    const std::vector<std::string> columns = run.columns;
+    run.next_row = [h5, row, t_last, where, columns](double& t, double* v) {
       if (!h5->next(t, v)) return false;
       ++*row;
       char at[64];
       std::snprintf(at, sizeof at, "%.17g", t);
       if (!std::isfinite(t))
         damaged(where + ": time of row " + std::to_string(*row) + " (" + at + ") is not a finite number");
+      for (size_t c = 0; c < columns.size(); ++c)
+        if (!std::isfinite(v[c])) {
+          std::snprintf(at, sizeof at, "%.17g", v[c]);
+          damaged(where + ": " + columns[c] + " of row " + std::to_string(*row) + " (" + at +
+                  ") is not a finite number (a run stops before it would write one)");
+        }
       if (!(t > *t_last))
         damaged(where + ": time of row " + std::to_string(*row) + " (" + at +
                 ") does not follow the row before");
