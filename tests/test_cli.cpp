@@ -771,6 +771,30 @@ TEST(Cli, AWriteErrorStopsTheRunWithExitThreeAndWholeRows) {
   fs::remove_all(dir);
 }
 
+TEST(Cli, AModelFileAmongTheRunsOwnFilesIsNotReplaced) {
+  // A model saved as OUT/events.csv, or an earlier run's OUT/model_resolved.yaml run again into
+  // OUT: the run would write over its own model file. Refused, the file unchanged; a model of
+  // another name in the folder is fine.
+  const fs::path dir = temp_dir("model_in_out");
+  fs::create_directories(dir);
+  const std::string text = lash::test::read_file(example());
+  for (const char* name : {"events.csv", "model_resolved.yaml"}) {
+    std::ofstream(dir / name) << text;
+    const Result r = run_lash("run " + (dir / name).string() + " -q -o " + dir.string() +
+                              " --set solver.end_time=0.001");
+    EXPECT_EQ(r.code, 2) << r.out;
+    EXPECT_NE(r.out.find("is one of the files this run writes"), std::string::npos) << r.out;
+    EXPECT_EQ(lash::test::read_file((dir / name).string()), text) << name;
+    fs::remove(dir / name);
+  }
+  std::ofstream(dir / "model.yaml") << text;
+  const Result ok = run_lash("run " + (dir / "model.yaml").string() + " -q -o " + dir.string() +
+                             " --set solver.end_time=0.001");
+  EXPECT_EQ(ok.code, 0) << ok.out;
+  EXPECT_EQ(lash::test::read_file((dir / "model.yaml").string()), text);
+  fs::remove_all(dir);
+}
+
 TEST(Cli, AClosedPipeOnStdoutIsNotTheEndOfARun) {
   // `lash run ... | head -0`: the closing line cannot be written; the run's files are whole and
   // it exits 0, not 141 (SIGPIPE), so a script with `set -o pipefail` sees a good run.

@@ -582,6 +582,21 @@ TEST(ModelLoader, AbsoluteToleranceIsOneTheErrorControlCanHonour) {
   EXPECT_TRUE(problems(kGood, {"solver.atol=1"}).empty());
 }
 
+TEST(ModelLoader, NumbersBelowTheSmallestNormalDoubleAreRefused) {
+  // A mass of 1e-320 passed "> 0" and the run stopped at t = 0 ("not finite"); a Young's modulus
+  // of 1e-320 ran a link with no stiffness to the end. Refused at their keys; 0 stays 0.
+  for (const char* bad : {"bodies.crank.mass=1e-320", "joints.gudgeon.journal_radius=4e-324",
+                          "bodies.rod.position=[0.11, -1e-310]", "gravity=[0, 1e-315]"}) {
+    auto d = problems(kGood, {bad});
+    ASSERT_GE(d.size(), 1u) << bad;
+    EXPECT_TRUE(d[0].message.find("below the smallest normal double") != std::string::npos ||
+                d[0].message.find("pair of finite numbers") != std::string::npos)
+        << d[0].message;
+  }
+  EXPECT_TRUE(problems(kGood, {"gravity=[0, 0]"}).empty());
+  EXPECT_TRUE(problems(kGood, {"bodies.crank.mass=2.3e-308"}).empty());
+}
+
 TEST(ModelLoader, OnlyRegularFilesOfBoundedSizeAreRead) {
   try {
     load_model_file("/dev/zero");

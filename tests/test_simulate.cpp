@@ -181,6 +181,19 @@ TEST(Failure, JournalDrivenThroughItsBearingStopsWithAStatus) {
   EXPECT_NEAR(r.rec->time.back(), r.result.status.t, 1e-12);
 }
 
+TEST(Failure, AJournalRadiusBelowTheEventResolutionStillStopsTheRun) {
+  // A journal radius of 1e-18 m: δ reaches it within the contact onset's own location, so no
+  // step sees its event function cross zero, and the contact law (stiffness about 1e-149) holds
+  // nothing. The run completed with the journal 3 cm through its bearing; the check at outputs
+  // stops it at the first output past the radius.
+  const SimRun r = run_example("flores_slider_crank.yaml",
+                               {"clearance_defaults.journal_radius=1e-18", "solver.end_time=0.002"});
+  ASSERT_FALSE(r.result.status.ok);
+  EXPECT_EQ(r.result.status.element, "rod_slider");
+  EXPECT_NE(r.result.status.message.find("through its bearing"), std::string::npos) << r.result.status.message;
+  EXPECT_LT(r.rec->data.at("rod_slider.delta").back(), 1e-4);  // stopped soon, not 3 cm in
+}
+
 TEST(Failure, AJournalThroughItsBearingBetweenOutputsStopsTheRun) {
   // K = 5e6 N/m^1.5: at t = 1.36 ms the journal sinks past its own radius (9.5 mm) and comes
   // back out before the next output (every 5 ms). The check at outputs let it complete, with

@@ -155,6 +155,15 @@ TEST(StudyFile, CrossZipRangesAndCases) {
   EXPECT_NEAR(lr[1].numbers[0], 1e-4, 1e-18);
   EXPECT_DOUBLE_EQ(lr[2].numbers[0], 1e-3);
 
+  // Ranges at the ends of the doubles: every level finite (1e308 to 1e308 gave inf).
+  for (const char* range : {"{from: 1e308, to: 1e308, count: 3}", "{from: 1e308, to: -1e308, count: 3}",
+                            "{from: 1.7976931348623157e308, to: 0, count: 4}"}) {
+    const auto big = study_runs(from_text("parameters:\n  bodies.crank.mass: " + std::string(range) + "\n"));
+    ASSERT_GE(big.size(), 3u) << range;
+    for (const auto& run : big) EXPECT_TRUE(std::isfinite(run.numbers[0])) << range << ": " << run.values[0];
+    EXPECT_EQ(big[0].numbers[0], std::strtod(std::string(range).substr(7).c_str(), nullptr)) << range;
+  }
+
   // Cases: named sets of overrides, one of them another model file.
   const StudySpec cases = from_text(
       "parameters:\n"

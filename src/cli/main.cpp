@@ -493,6 +493,23 @@ int main(int argc, char** argv) {
                  "report, or report on the earlier run's folder\n";
     return 2;
   }
+  {
+    // The model file itself among the files the run writes (`lash run out/model_resolved.yaml
+    // -o out`, a model saved as out/events.csv): it would be replaced by the run's.
+    namespace fs = std::filesystem;
+    std::error_code e1, e2;
+    const fs::path model_file = fs::weakly_canonical(fs::absolute(model_path), e1);
+    const fs::path to_dir = fs::weakly_canonical(fs::absolute(out_dir), e2);
+    if (!e1 && !e2 && model_file.parent_path() == to_dir) {
+      const auto& files = lash::ResultsWriter::run_files();
+      if (std::find(files.begin(), files.end(), model_file.filename().string()) != files.end()) {
+        std::cerr << "error: the model file " << model_path << " is one of the files this run "
+                  << "writes into " << out_dir << "/; copy it elsewhere or write into another "
+                  << "folder (-o)\nnothing was run\n";
+        return kExitBadInput;
+      }
+    }
+  }
   if (!from_state.empty()) {
     // The state file would be replaced by the new run's before it is read to the end, and the
     // run it came from lost: continue into another folder.

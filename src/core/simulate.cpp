@@ -598,14 +598,15 @@ RunResult simulate(const Model& model, Workspace& ws, Observer& observer,
       result.status = pulled_apart(model, ws, t);
       return false;
     }
-    // The start state (a --from state or a continued run): the event function sees a journal
-    // reach its radius during the run, not one that starts past it.
-    if (t == t0)
-      for (int k = 0; k < ws.nc; ++k)
-        if (ws.clearance_out[k].delta >= model.joints[ws.clearance_joints[k]].clearance->journal_radius) {
-          result.status = through_bearing(model, ws, k, t);
-          return false;
-        }
+    // A journal past its own radius into the wall at an output: the start state (a --from
+    // state), whose event function starts past zero, or a crossing no step located (a journal
+    // radius of 1e-18 m is crossed within the contact onset's own location, and such a run
+    // completed with the journal 3 cm through its bearing).
+    for (int k = 0; k < ws.nc; ++k)
+      if (ws.clearance_out[k].delta >= model.joints[ws.clearance_joints[k]].clearance->journal_radius) {
+        result.status = through_bearing(model, ws, k, t);
+        return false;
+      }
     observer.progress(t, s.end_time);
     return true;
   };

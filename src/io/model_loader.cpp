@@ -15,6 +15,7 @@
 #include <tuple>
 #include <algorithm>
 #include <set>
+#include <limits>
 #include <optional>
 #include <sstream>
 #include <string_view>
@@ -76,6 +77,9 @@ class Section {
     }
   }
 
+  /// Not 0 and below the smallest normal double (1e-320): its arithmetic has lost its precision,
+  /// and a stiffness or mass that small made runs that completed with nothing holding a link.
+  static bool subnormal(double v) { return v != 0.0 && std::abs(v) < std::numeric_limits<double>::min(); }
   static bool usable(const YAML::Node& n) { return n.IsDefined() && n.IsMap(); }
   static bool has_position(const YAML::Node& n) { return n.IsDefined() && n.Mark().line >= 0; }
   static std::string join_scalars(const YAML::Node& n) {
@@ -105,6 +109,12 @@ class Section {
     double v = 0.0;
     if (!n.IsScalar() || !YAML::convert<double>::decode(n, v) || !std::isfinite(v)) {
       r_.error(n, element_, "'" + key + "' must be a number" + units + ", got " + kind(n));
+      return std::nullopt;
+    }
+    if (subnormal(v)) {
+      r_.error(n, element_, "'" + key + "' is " + n.Scalar() + ", below the smallest normal double (" +
+                                fmt_num(std::numeric_limits<double>::min()) +
+                                "), where arithmetic has lost its precision");
       return std::nullopt;
     }
     if (check) {
@@ -138,7 +148,8 @@ class Section {
     const YAML::Node n = node_[key];
     double x, y;
     if (!n.IsSequence() || n.size() != 2 || !YAML::convert<double>::decode(n[0], x) ||
-        !YAML::convert<double>::decode(n[1], y) || !std::isfinite(x) || !std::isfinite(y)) {
+        !YAML::convert<double>::decode(n[1], y) || !std::isfinite(x) || !std::isfinite(y) ||
+        subnormal(x) || subnormal(y)) {
       r_.error(n, element_, "'" + key + "' must be a pair of finite numbers [x, y]" + units +
                                 ", got " + (n.IsSequence() ? "[" + join_scalars(n) + "]" : kind(n)));
       return std::nullopt;

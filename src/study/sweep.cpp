@@ -207,13 +207,16 @@ void read_parameter(Reader& r, const YAML::Node& key, const YAML::Node& v, Study
     for (long i = 0; i < n; ++i) {
       const double f = n == 1 ? 0.0 : static_cast<double>(i) / (n - 1);
       // (a·(n−1−i) + b·i)/(n−1): 0.05e-3 to 0.5e-3 in 10 steps gives 1e-4, not 9.9999999999999991e-05.
-      const double x = p.log ? std::exp(std::log(a) + f * (std::log(b) - std::log(a)))
-                             : n == 1 ? a : (a * (n - 1 - i) + b * i) / (n - 1);
+      double x = p.log ? std::exp(std::log(a) + f * (std::log(b) - std::log(a)))
+                       : n == 1 ? a : (a * (n - 1 - i) + b * i) / (n - 1);
+      // Near the largest double that sum overflows (from: 1e308 gave inf); this form cannot.
+      if (!std::isfinite(x)) x = a * (1.0 - f) + b * f;
       // Rounded to 15 significant digits, the levels are the decimal numbers meant (1e-4, not
       // 9.999999999999999e-05); the end point exactly as written.
       char buf[32];
       std::snprintf(buf, sizeof buf, "%.15g", x);
-      const double xv = i == n - 1 && n > 1 ? b : std::strtod(buf, nullptr);
+      const double rounded = std::strtod(buf, nullptr);  // inf past the largest double: x then
+      const double xv = i == n - 1 && n > 1 ? b : std::isfinite(rounded) ? rounded : x;
       p.numbers.push_back(xv);
       p.values.push_back(number_text(xv));
     }
@@ -568,6 +571,8 @@ StudySpec load_study_text(const std::string& text, const std::string& file,
     // Continuation runs every level in one chain: each is loaded, whatever their number.
     if (!cases && spec.continuation.empty() && probes >= kMaxProbes) continue;
     for (size_t k = 0; k < p.values.size(); ++k) {
+      // (Within one parameter too: 10⁵ levels of one parameter took two minutes to load.)
+      if (!cases && spec.continuation.empty() && probes >= kMaxProbes) break;
       const auto it = level_runs.find({j, p.values[k]});
       if (it == level_runs.end()) continue;
       bool ok = false;
