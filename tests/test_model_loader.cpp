@@ -582,6 +582,34 @@ TEST(ModelLoader, AbsoluteToleranceIsOneTheErrorControlCanHonour) {
   EXPECT_TRUE(problems(kGood, {"solver.atol=1"}).empty());
 }
 
+TEST(ModelLoader, AnElementThatIsNotAMapIsReportedAtItsLine) {
+  // `pin: [1, 2]` was "unknown joint type 'null' ... (value set with --set)": no line, a --set
+  // that was never given, and a type nobody wrote.
+  struct Case {
+    std::string from, to, line_col, message;
+  };
+  const std::string pin = "  pin: {type: revolute, journal: crank.A, bearing: rod.A}";
+  for (const Case& c : std::vector<Case>{
+           {pin, "  pin: [1, 2]", "19:8", "joint 'pin': expected a map of keys such as {type: revolute"},
+           {pin, "  pin: revolute", "19:8", "got 'revolute'"},
+           {pin, "  pin:", "19:3", "joint 'pin': expected a map of keys such as"},
+           {pin, "  pin: {type: [revolute], journal: crank.A, bearing: rod.A}", "19:15",
+            "'type' must be one word, got a list; expected one of: revolute"},
+           {"drivers:\n  motor: {joint: pivot, speed_rpm: 5000}", "drivers:\n  motor: [1]", "31:10",
+            "driver 'motor': expected a map of keys (key: value), got a list"},
+           {"drivers:\n  motor: {joint: pivot, speed_rpm: 5000}", "drivers:\n  motor:", "31:3",
+            "driver 'motor': give either 'joint'"},
+           {"drivers:", "loads: {f: [1]}\nsensors: {s: 5}\ndrivers:", "30:12",
+            "load 'f': expected a map of keys such as {type: force"}}) {
+    SCOPED_TRACE(c.to);
+    const auto d = problems(with(c.from, c.to));
+    ASSERT_EQ(d.size(), c.to.find("sensors") != std::string::npos ? 2u : 1u);
+    EXPECT_EQ(std::to_string(d[0].line) + ":" + std::to_string(d[0].column), c.line_col) << d[0].str();
+    EXPECT_NE(d[0].str().find(c.message), std::string::npos) << d[0].str();
+    EXPECT_EQ(d[0].str().find("--set"), std::string::npos) << d[0].str();
+  }
+}
+
 TEST(ModelLoader, NumbersBelowTheSmallestNormalDoubleAreRefused) {
   // A mass of 1e-320 passed "> 0" and the run stopped at t = 0 ("not finite"); a Young's modulus
   // of 1e-320 ran a link with no stiffness to the end. Refused at their keys; 0 stays 0.

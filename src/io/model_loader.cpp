@@ -64,6 +64,7 @@ class Section {
     if (!node.IsDefined() || node.IsNull()) return;
     if (!node.IsMap()) {
       r_.error(node, element_, "expected a map of keys (key: value), got " + kind(node));
+      refused_ = true;
       return;
     }
     for (const auto& kv : node_) {
@@ -81,7 +82,10 @@ class Section {
   /// and a stiffness or mass that small made runs that completed with nothing holding a link.
   static bool subnormal(double v) { return v != 0.0 && std::abs(v) < std::numeric_limits<double>::min(); }
   static bool usable(const YAML::Node& n) { return n.IsDefined() && n.IsMap(); }
-  static bool has_position(const YAML::Node& n) { return n.IsDefined() && n.Mark().line >= 0; }
+  /// (An empty value's position is the next token's, often on a later line: not its own.)
+  static bool has_position(const YAML::Node& n) {
+    return n.IsDefined() && !n.IsNull() && n.Mark().line >= 0;
+  }
   static std::string join_scalars(const YAML::Node& n) {
     std::string out;
     for (size_t i = 0; i < n.size(); ++i)
@@ -98,6 +102,11 @@ class Section {
   bool has(const std::string& key) const { return node_[key].IsDefined() && !node_[key].IsNull(); }
   YAML::Node get(const std::string& key) const { return node_[key]; }
   const YAML::Node& node() const { return node_; }
+  /// Where a problem of the whole element is reported: the map itself, or where it was expected
+  /// (node() is an empty map without a position when the element is not a map).
+  const YAML::Node& where() const { return anchor_; }
+  /// The element was not a map (already reported): nothing more to say about it.
+  bool refused() const { return refused_; }
   const std::string& element() const { return element_; }
   Reporter& reporter() { return r_; }
 
@@ -161,6 +170,7 @@ class Section {
   Reporter& r_;
   YAML::Node node_;
   YAML::Node anchor_;  ///< where to point when a key is missing: the map, or its parent
+  bool refused_ = false;
   std::string element_;
   std::vector<std::string> allowed_;
 };
@@ -262,7 +272,7 @@ class Loader {
   std::optional<PointRef> point(Section& s, const std::string& key, bool required = true) {
     if (!s.has(key)) {
       if (required)
-        r_.error(s.node(), s.element(), "missing required key '" + key + "' (body.marker)");
+        r_.error(s.where(), s.element(), "missing required key '" + key + "' (body.marker)");
       return std::nullopt;
     }
     const auto text = s.text(key);
@@ -403,7 +413,7 @@ class Loader {
 
   /// A body's `flexible:` map: an ANCF beam (core/beam.hpp) along the body's x axis.
   void read_flexible(Section& body, Body& b) {
-    Section f(r_, body.get("flexible"), body.node(), body.element() + " flexible",
+    Section f(r_, body.get("flexible"), body.where(), body.element() + " flexible",
               {"length", "elements", "section", "youngs_modulus", "density", "damping"});
     beam::Mesh& m = b.mesh;
     m.length = f.required_number("length", " (m, end A at x = -length/2, B at +length/2)",
@@ -418,12 +428,12 @@ class Loader {
     b.structural_damping =
         f.number("damping", " (s, Kelvin–Voigt retardation time)", non_negative).value_or(0.0);
     if (!f.has("section")) {
-      r_.error(f.get("length").IsDefined() ? body.get("flexible") : body.node(), f.element(),
+      r_.error(f.get("length").IsDefined() ? body.get("flexible") : body.where(), f.element(),
                "missing required key 'section': {rectangle: [width, height]}, {tube: [outer "
                "diameter, inner diameter]}, {circle: diameter} or {area, inertia, fibre}");
       return;
     }
-    Section sec(r_, f.get("section"), f.node(), f.element() + " section",
+    Section sec(r_, f.get("section"), f.where(), f.element() + " section",
                 {"rectangle", "tube", "circle", "area", "inertia", "fibre"});
     const int shapes = sec.has("rectangle") + sec.has("tube") + sec.has("circle") + sec.has("area");
     if (shapes != 1) {
@@ -482,8 +492,9 @@ class Loader {
     for (const auto& kv : n) {
       const std::string name = kv.first.as<std::string>("");
       const std::string element = "joint '" + name + "'";
-      const YAML::Node type_node = kv.second.IsMap() ? kv.second["type"] : YAML::Node();
-      const std::string type = type_node.IsDefined() ? type_node.as<std::string>("") : "";
+      if (!element_map(kv, element, "{type: revolute, journal: ..., bearing: ...}")) continue;
+      const YAML::Node type_node = kv.second["type"];
+      const std::string type = type_node.IsScalar() ? type_node.Scalar() : "";
       Joint j;
       j.name = name;
       std::vector<std::string> keys{"type"};
@@ -504,7 +515,9 @@ class Loader {
         const std::vector<std::string> types{"revolute", "translational", "fixed", "distance"};
         const std::string near = closest_match(type, types);
         r_.error(type_node.IsDefined() ? type_node : kv.second, element,
-                 type.empty() ? "missing 'type', expected one of: " + join(types)
+                 type.empty() ? (type_node.IsDefined() && !type_node.IsNull()
+                                     ? "'type' must be one word, got " + Section::kind(type_node) + "; expected one of: "
+                                     : std::string("missing 'type', expected one of: ")) + join(types)
                               : "unknown joint type '" + type + "', expected one of: " +
                                     join(types) +
                                     (near.empty() ? "" : " (did you mean '" + near + "'?)"));
@@ -554,7 +567,7 @@ class Loader {
   std::optional<lash::Material> material(Section& j, const std::string& key) {
     if (!j.has(key)) return std::nullopt;  // `j` is the joint merged with its defaults
     const YAML::Node n = j.get(key);
-    Section s(r_, n, j.node(), j.element() + " " + key, {"youngs_modulus", "poisson_ratio"});
+    Section s(r_, n, j.where(), j.element() + " " + key, {"youngs_modulus", "poisson_ratio"});
     lash::Material mat;
     mat.youngs_modulus = s.required_number("youngs_modulus", " (Pa)", positive, 207e9);
     mat.poisson_ratio = s.required_number("poisson_ratio", "", poisson, 0.3);
@@ -579,7 +592,7 @@ class Loader {
     if (s.has("material"))
       for (const char* k : {"journal_material", "bearing_material"})
         if (!s.has(k)) merged.remove(k);
-    Section c(r_, merged, s.node(), s.element(), kClearanceKeys);
+    Section c(r_, merged, s.where(), s.element(), kClearanceKeys);
     Clearance cl;
     const auto clearance = c.number("clearance", " (m)", non_negative);
     const auto rj = c.number("journal_radius", " (m)", positive);
@@ -604,13 +617,13 @@ class Loader {
       cl.bearing_radius = *rb;
       cl.clearance = *rb - *rj;
     } else {
-      r_.error(s.node(), s.element(),
+      r_.error(s.where(), s.element(),
                "a clearance joint needs two of clearance, journal_radius, bearing_radius "
                "(here or in clearance_defaults)");
       return;
     }
     // At the clearance's value where it has one (an override's is said to be one), else the joint.
-    const YAML::Node at = c.has("clearance") ? c.get("clearance") : s.node();
+    const YAML::Node at = c.has("clearance") ? c.get("clearance") : s.where();
     if (!(cl.clearance > 0) || !(cl.journal_radius > 0)) {
       r_.error(at, s.element(),
                "clearance must be > 0 and smaller than the bearing radius, got clearance " +
@@ -648,7 +661,7 @@ class Loader {
       if (!mj) mj = common;
       if (!mb) mb = common;
       if (!mj || !mb) {
-        r_.error(s.node(), s.element(),
+        r_.error(s.where(), s.element(),
                  "give the contact 'stiffness' or a 'material' {youngs_modulus, poisson_ratio} "
                  "(here or in clearance_defaults)");
       } else {  // the stiffness is derived from the materials by finalize
@@ -661,7 +674,7 @@ class Loader {
                         cl.normal_law == NormalLaw::flores;
     if (damped) {
       if (!c.has("restitution"))
-        r_.error(s.node(), s.element(), "normal_law " + law + " needs 'restitution' in (0, 1]");
+        r_.error(s.where(), s.element(), "normal_law " + law + " needs 'restitution' in (0, 1]");
       cl.contact.restitution = c.number("restitution", "", unit_interval).value_or(1.0);
     }
     if (cl.normal_law == NormalLaw::impact) {
@@ -675,7 +688,7 @@ class Loader {
 
   void read_friction(Section& c, const std::string& element, Clearance& cl) {
     if (!c.has("friction")) return;
-    Section f(r_, c.get("friction"), c.node(), element + " friction",
+    Section f(r_, c.get("friction"), c.where(), element + " friction",
               {"law", "mu", "v0", "v1", "mu_static", "mu_dynamic", "v_static", "v_dynamic",
                "sigma0", "sigma1", "sigma2", "v_stribeck", "v_damping"});
     const std::string law = f.text("law").value_or("none");
@@ -729,6 +742,17 @@ class Loader {
     }
   }
 
+  /// An element of a map of elements (a joint, a load) must itself be a map: `name: [1, 2]` or
+  /// `name: revolute` is reported at it, with what was expected, and the element is skipped.
+  template <class KeyValue>
+  bool element_map(const KeyValue& kv, const std::string& element, const std::string& example) {
+    if (kv.second.IsMap()) return true;
+    const YAML::Node at = Section::has_position(kv.second) ? kv.second : kv.first;
+    r_.error(at, element, "expected a map of keys such as " + example + ", got " +
+                              Section::kind(kv.second));
+    return false;
+  }
+
   void read_drivers(Model& m, const YAML::Node& n) {
     if (!n.IsDefined() || n.IsNull()) return;
     if (!n.IsMap()) {
@@ -739,11 +763,12 @@ class Loader {
       const std::string name = kv.first.as<std::string>("");
       Section s(r_, kv.second, kv.first, "driver '" + name + "'",
                 {"joint", "body", "coordinate", "speed_rpm", "speed", "motion", "initial"});
+      if (s.refused()) continue;
       nodes_[s.element()] = kv.second;
       Driver d;
       d.name = name;
       if (s.has("joint") == s.has("body")) {
-        r_.error(s.node(), s.element(),
+        r_.error(s.where(), s.element(),
                  "give either 'joint' (drive a joint coordinate) or 'body' (drive a body's "
                  "coordinate relative to the ground), got " +
                      std::string(s.has("joint") ? "both" : "neither"));
@@ -804,7 +829,7 @@ class Loader {
       }
       const int given = s.has("speed_rpm") + s.has("speed") + s.has("motion");
       if (given != 1) {
-        r_.error(s.node(), s.element(),
+        r_.error(s.where(), s.element(),
                  "give exactly one of speed_rpm, speed (rad/s or m/s, or an expression of time) "
                  "or motion (expression of time), got " + std::to_string(given));
         continue;
@@ -855,8 +880,9 @@ class Loader {
     for (const auto& kv : n) {
       const std::string name = kv.first.as<std::string>("");
       const std::string element = "load '" + name + "'";
-      const YAML::Node tn = kv.second.IsMap() ? kv.second["type"] : YAML::Node();
-      const std::string type = tn.IsDefined() ? tn.as<std::string>("") : "";
+      if (!element_map(kv, element, "{type: force, point: ..., fx: ..., fy: ...}")) continue;
+      const YAML::Node tn = kv.second["type"];
+      const std::string type = tn.IsScalar() ? tn.Scalar() : "";
       const std::vector<std::string> types{"force", "torque", "spring_damper",
                                            "torsional_spring_damper", "bushing"};
       nodes_[element] = kv.second;
@@ -878,7 +904,7 @@ class Loader {
         Section s(r_, kv.second, kv.first, element, {"type", "body", "torque"});
         l.type = LoadType::torque;
         // "body", or "link.marker": the point of a flexible link the torque acts on.
-        if (!s.has("body")) r_.error(s.node(), element, "missing required key 'body'");
+        if (!s.has("body")) r_.error(s.where(), element, "missing required key 'body'");
         else if (auto t = s.text("body"))
           if (auto a = resolve_point(s.get("body"), element, *t)) l.a = *a, l.body_a = a->body;
         expr(s, "torque", l.torque);
@@ -897,7 +923,7 @@ class Loader {
         l.type = LoadType::torsional_spring_damper;
         const YAML::Node bn = s.get("bodies");
         if (!bn.IsDefined() || !bn.IsSequence() || bn.size() != 2) {
-          r_.error(bn.IsDefined() ? bn : s.node(), element,
+          r_.error(bn.IsDefined() ? bn : s.where(), element,
                    "'bodies' must be a pair [body_a, body_b]");
         } else {
           // Each "body", or "link.marker": the point of a flexible link whose angle counts.
@@ -944,7 +970,9 @@ class Loader {
       } else {
         const std::string near = closest_match(type, types);
         r_.error(tn.IsDefined() ? tn : kv.second, element,
-                 (type.empty() ? std::string("missing 'type'") : "unknown load type '" + type + "'") +
+                 (type.empty() ? std::string(tn.IsDefined() && !tn.IsNull() ? "'type' must be one word, got " + Section::kind(tn)
+                                                                           : "missing 'type'")
+                               : "unknown load type '" + type + "'") +
                      ", expected one of: " + join(types) +
                      (near.empty() || type.empty() ? "" : " (did you mean '" + near + "'?)"));
         continue;
@@ -966,6 +994,7 @@ class Loader {
       const std::string element = "sensor '" + name + "'";
       Section s(r_, kv.second, kv.first, element,
                 {"type", "at", "axis", "frame", "gravity", "mass"});
+      if (s.refused()) continue;
       nodes_[element] = kv.second;
       Sensor sn;
       sn.name = name;
@@ -973,7 +1002,7 @@ class Loader {
       const auto it = std::find(types.begin(), types.end(), type);
       if (it == types.end()) {
         const std::string near = closest_match(type, types);
-        r_.error(s.has("type") ? s.get("type") : s.node(), element,
+        r_.error(s.has("type") ? s.get("type") : s.where(), element,
                  (type.empty() ? std::string("missing 'type'") : "unknown sensor type '" + type + "'") +
                      ", expected one of: " + join(types) +
                      (near.empty() || type.empty() ? "" : " (did you mean '" + near + "'?)"));
@@ -1068,7 +1097,7 @@ class Loader {
                  "unknown output_format '" + *f + "', expected one of: csv, hdf5");
     }
     if (s.has("baumgarte")) {
-      Section b(r_, s.get("baumgarte"), s.node(), "solver baumgarte", {"alpha", "beta"});
+      Section b(r_, s.get("baumgarte"), s.where(), "solver baumgarte", {"alpha", "beta"});
       st.baumgarte_alpha = b.number("alpha", " (1/s)", non_negative).value_or(st.baumgarte_alpha);
       st.baumgarte_beta = b.number("beta", " (1/s)", non_negative).value_or(st.baumgarte_beta);
     }
