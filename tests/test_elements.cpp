@@ -5,6 +5,10 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <tuple>
+#include <vector>
 
 #include "core/elements/registry.hpp"
 #include "core/finalize.hpp"
@@ -401,6 +405,37 @@ TEST(State, AStateOfAnotherModelIsRefusedWithWhatDiffers) {
     EXPECT_NE(msg.find("does not match the model"), std::string::npos) << msg;
     EXPECT_NE(msg.find("rod_slider.impact_velocity"), std::string::npos) << msg;
   }
+  // A value of the wrong type is named ("type must be number, but is string" named none).
+  const nlohmann::json good = nlohmann::json::parse(std::ifstream(path));
+  for (const auto& [key, value, said] : std::vector<std::tuple<std::string, nlohmann::json, std::string>>{
+           {"t", "x", "'t' must be a number (s), got \"x\""},
+           {"t", true, "'t' must be a number (s), got true"},
+           {"step", "1e-6", "'step' must be a number (s)"},
+           {"y", nlohmann::json::array({1, "2"}), "entry 1 of 'y' must be a number, got \"2\""},
+           {"names", 5, "'names' must be a list of names, got 5"}}) {
+    nlohmann::json bad = good;
+    bad[key] = value;
+    std::ofstream(path) << bad.dump();
+    try {
+      read_state(path, flores, wf);
+      ADD_FAILURE() << "accepted " << key << " = " << value.dump();
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find(said), std::string::npos) << e.what();
+    }
+  }
+  nlohmann::json no_t = good;
+  no_t.erase("t");
+  std::ofstream(path) << no_t.dump();
+  EXPECT_THROW(
+      {
+        try {
+          read_state(path, flores, wf);
+        } catch (const std::runtime_error& e) {
+          EXPECT_NE(std::string(e.what()).find("'t' is missing"), std::string::npos) << e.what();
+          throw;
+        }
+      },
+      std::runtime_error);
   std::filesystem::remove(path);
 }
 

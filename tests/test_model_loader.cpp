@@ -347,6 +347,21 @@ TEST(ModelLoader, MotionThatCannotBeDifferentiatedIsRejectedWithAHint) {
   EXPECT_NE(s[0].message.find("bad expression in 'speed': cannot differentiate"), std::string::npos)
       << s[0].str();
   EXPECT_TRUE(problems(with("speed_rpm: 5000", "motion: \"max(0, time - 0.01)^3\"")).empty());
+  // Derivatives that are not finite at time 0 (√t's 1/(2√t)): reported at the expression, with
+  // its driver; they were found only when the run started, with no line and no element.
+  for (const auto& [key, text, order] :
+       std::vector<std::tuple<std::string, std::string, int>>{{"motion", "sqrt(t)", 1},
+                                                               {"motion", "abs(t)^1.5", 2},
+                                                               {"speed", "sqrt(t)", 1}}) {
+    const auto n = problems(with("speed_rpm: 5000", key + ": \"" + text + "\""));
+    ASSERT_EQ(n.size(), 1u) << text;
+    EXPECT_EQ(n[0].line, 31) << n[0].str();
+    EXPECT_NE(n[0].str().find("driver 'motor': bad expression in '" + key + "': expression '" + text +
+                              "' failed at time 0 s: its time derivative of order " +
+                              std::to_string(order) + " is not finite"),
+              std::string::npos)
+        << n[0].str();
+  }
 }
 
 TEST(ModelLoader, MissingSectionPointsIntoTheFileNotAtAnOverride) {

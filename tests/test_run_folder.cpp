@@ -7,7 +7,10 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "io/model_loader.hpp"
 #include "io/results_writer.hpp"
@@ -260,6 +263,19 @@ TEST(RunFolder, NonFiniteTimesAndFilesThatAreNotRegularAreRefused) {
     fs::remove(dir / name);
     std::ofstream(dir / name) << (std::string(name) == "events.csv" ? events : csv);
   }
+  // A count in summary.json that is not a whole number >= 0 (1e30 rows was said as
+  // -9223372036854775808).
+  const std::string summary = lash::test::read_file((dir / "summary.json").string());
+  for (const auto& [key, value] : std::vector<std::pair<std::string, std::string>>{
+           {"output.rows", "1e30"}, {"output.rows", "-1"}, {"integrator.steps", "2.5"}}) {
+    auto j = nlohmann::json::parse(summary);
+    const std::string section = key.substr(0, key.find('.')), name = key.substr(key.find('.') + 1);
+    j[section][name] = nlohmann::json::parse(value);
+    std::ofstream(dir / "summary.json") << j.dump();
+    expect_refused("summary.json: damaged (" + key + " is " + nlohmann::json::parse(value).dump() +
+                   ", expected a whole number >= 0)");
+  }
+  std::ofstream(dir / "summary.json") << summary;
   EXPECT_NO_THROW(from_folder(dir, o));
   fs::remove_all(dir);
 }

@@ -191,6 +191,10 @@ std::string check_expression(const std::string& text, const std::vector<std::str
   try {
     Expression e(text, vars, time_derivatives);
     e.eval();  // throws ExpressionError if the value at time 0 is not finite
+    if (time_derivatives > 0) {  // and the derivatives a driver needs there (sqrt(t): 1/(2√t))
+      std::vector<double> d(static_cast<size_t>(time_derivatives) + 1);
+      e.eval_derivatives(0.0, d.data());
+    }
   } catch (const std::exception& e) {
     return e.what();
   }

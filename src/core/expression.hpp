@@ -96,8 +96,9 @@ class Expression {
   int n_derivatives_ = 0;
 };
 
-/// Checks an expression compiles with the given body names and, with `time_derivatives` > 0, that
-/// it can be differentiated that many times in time; returns "" or the error message.
+/// Checks an expression compiles with the given body names, that its value at time 0 is finite
+/// and, with `time_derivatives` > 0, that it can be differentiated that many times in time with
+/// finite derivatives at time 0; returns "" or the error message.
 std::string check_expression(const std::string& text, const std::vector<std::string>& body_names,
                              int time_derivatives = 0);
 

@@ -135,6 +135,16 @@ RecordedRun read_run_folder(const std::string& dir, const Model& model) {
   namespace fs = std::filesystem;
   const std::string summary_path = dir + "/summary.json", model_path = dir + "/model_resolved.yaml";
   RecordedRun run;
+  // A count (rows, steps, events): a whole number >= 0 as the run wrote it (1e30 became
+  // -9223372036854775808, a conversion with no defined result).
+  auto count = [&](const json& parent, const std::string& name) -> long {
+    const json& v = parent.at(name.substr(name.find('.') + 1));
+    if (!v.is_number_integer() || (v.is_number_unsigned() ? v.get<unsigned long long>() > 1ULL << 62
+                                                          : v.get<long long>() < 0))
+      damaged(summary_path + ": damaged (" + name + " is " + v.dump().substr(0, 40) +
+              ", expected a whole number >= 0); run the model again");
+    return v.get<long>();
+  };
 
   // summary.json: the run's own account, written last; without it the run did not finish.
   if (!fs::exists(summary_path))
@@ -166,14 +176,14 @@ RecordedRun read_run_folder(const std::string& dir, const Model& model) {
     s.message = st.at("message").get<std::string>();
     const json& in = member(sum, summary_path, "integrator");
     run.result.integrator = in.at("name").get<std::string>();
-    run.result.stats.steps = in.at("steps").get<long>();
-    run.result.stats.rejected_steps = in.at("rejected_steps").get<long>();
-    run.result.stats.rhs_evaluations = in.at("rhs_evaluations").get<long>();
-    run.result.stats.events = in.at("events").get<long>();
+    run.result.stats.steps = count(in, "integrator.steps");
+    run.result.stats.rejected_steps = count(in, "integrator.rejected_steps");
+    run.result.stats.rhs_evaluations = count(in, "integrator.rhs_evaluations");
+    run.result.stats.events = count(in, "integrator.events");
     run.result.stats.projections = in.value("projections", 0L);
     run.result.wall_seconds = in.at("wall_seconds").get<double>();
-    run.result.outputs = in.at("outputs").get<long>();
-    run.result.missed_events = in.at("missed_events").get<long>();
+    run.result.outputs = count(in, "integrator.outputs");
+    run.result.missed_events = count(in, "integrator.missed_events");
     run.result.max_constraint_violation = sum.at("max_constraint_violation").get<double>();
     if (sum.contains("warnings"))
       run.result.warnings = sum["warnings"].get<std::vector<std::string>>();
@@ -216,7 +226,7 @@ RecordedRun read_run_folder(const std::string& dir, const Model& model) {
   long long rows = 0;
   std::string file;
   try {
-    rows = output.at("rows").get<long long>();
+    rows = count(output, "output.rows");
     file = output.at("file").get<std::string>();
     run.columns = output.at("channels").get<std::vector<std::string>>();
   } catch (const json::exception& e) {

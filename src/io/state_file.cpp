@@ -62,13 +62,33 @@ State read_state(const std::string& path, const Model& model, const Workspace& w
   if (!j.is_object() || j.value("format", "") != kFormat)
     throw fail(std::string("not a Lash state file (expected \"format\": \"") + kFormat + "\")");
   State st;
+  // Each entry checked by name: "'t' must be a number (s), got \"x\"", not a JSON library's
+  // "type must be number, but is string".
+  auto member = [&](const char* key) -> const json& {
+    if (!j.contains(key)) throw fail(std::string("'") + key + "' is missing");
+    return j.at(key);
+  };
+  auto list_of = [&](const char* key, bool numbers) {
+    const json& v = member(key);
+    if (!v.is_array())
+      throw fail(std::string("'") + key + "' must be a list of " + (numbers ? "numbers" : "names") +
+                 ", got " + v.dump().substr(0, 40));
+    for (size_t i = 0; i < v.size(); ++i)
+      if (numbers ? !v[i].is_number() : !v[i].is_string())
+        throw fail(std::string("entry ") + std::to_string(i) + " of '" + key + "' must be a " +
+                   (numbers ? "number" : "name") + ", got " + v[i].dump().substr(0, 40));
+    return v;
+  };
   try {
+    if (!member("t").is_number()) throw fail("'t' must be a number (s), got " + j.at("t").dump().substr(0, 40));
     st.t = j.at("t").get<double>();
+    if (j.contains("step") && !j.at("step").is_number())
+      throw fail("'step' must be a number (s), got " + j.at("step").dump().substr(0, 40));
     st.step = j.value("step", 0.0);
     if (!std::isfinite(st.step) || st.step < 0)
       throw fail("'step' must be a finite step size >= 0 s, got " + j.at("step").dump());
-    const auto names = j.at("names").get<std::vector<std::string>>();
-    const auto y = j.at("y").get<std::vector<double>>();
+    const auto names = list_of("names", false).get<std::vector<std::string>>();
+    const auto y = list_of("y", true).get<std::vector<double>>();
     const auto expected = state_names(model, ws);
     if (names.size() != y.size()) throw fail("'names' and 'y' differ in length");
     if (names != expected) {
