@@ -795,6 +795,19 @@ TEST(Cli, AModelFileAmongTheRunsOwnFilesIsNotReplaced) {
   fs::remove_all(dir);
 }
 
+TEST(Cli, CheckTakesAModelWithAStrayModelKeyForAModel) {
+  // `model: foo` above a model's bodies: `lash check` read it as a study and listed nine
+  // "study: unknown key 'bodies'" problems; `lash run` said the one that it is.
+  const fs::path dir = temp_dir("stray_model_key");
+  fs::create_directories(dir);
+  std::ofstream(dir / "m.yaml") << "model: foo\n" << lash::test::read_file(example());
+  const Result r = run_lash("check " + (dir / "m.yaml").string());
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("m.yaml:1:1: model: unknown key 'model'"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("1 problem found"), std::string::npos) << r.out;
+  fs::remove_all(dir);
+}
+
 TEST(Cli, AClosedPipeOnStdoutIsNotTheEndOfARun) {
   // `lash run ... | head -0`: the closing line cannot be written; the run's files are whole and
   // it exits 0, not 141 (SIGPIPE), so a script with `set -o pipefail` sees a good run.

@@ -625,6 +625,37 @@ TEST(ModelLoader, AnElementThatIsNotAMapIsReportedAtItsLine) {
   }
 }
 
+TEST(ModelLoader, OneMistakeIsOneProblemSayingWhatWasGiven) {
+  // Each of these gave two problems (a contradiction, or a follow-on "unknown marker"), or a
+  // message that did not say what was wrong.
+  const std::string tmd = lash::test::read_file(lash::test::example_path("tmd_slider_crank.yaml"));
+  auto in_tmd = [&](const std::string& to) {
+    std::string s = tmd;
+    const std::string from = "stiffness: [198951, 198951]";
+    return s.replace(s.find(from), from.size(), to);
+  };
+  struct Case {
+    std::string yaml, said;
+  };
+  for (const Case& c : std::vector<Case>{
+           {in_tmd("stiffness: -1"), "stiffness must be >= 0, got -1"},
+           {in_tmd("stiffness: [1, -2]"), "must be a number >= 0 or a pair [x, y] of them (N/m), got [1, -2]"},
+           {with("    markers: {O: [-0.025, 0], A: [0.025, 0]}", "    markers: {O: [-0.025, .inf], A: [0.025, 0]}"),
+            "marker 'O' must be [x, y], finite numbers in body coordinates (m), got [-0.025, .inf]"},
+           {with("drivers:", "loads: {f: {type: force, point: rod.A, fx: [1, 2], fy: 0}}\ndrivers:"),
+            "'fx' must be a number or an expression (text), got a list"}}) {
+    const auto d = problems(c.yaml);
+    ASSERT_EQ(d.size(), 1u) << c.said << "\n" << (d.size() > 1 ? d[1].str() : "");
+    EXPECT_GT(d[0].line, 0);
+    EXPECT_NE(d[0].message.find(c.said), std::string::npos) << d[0].str();
+  }
+  // An axis of any length is a direction ([1e200, 1e200]'s norm overflowed: "must be a unit vector").
+  const Model big = load_model_text(with("axis: [1, 0]", "axis: [1e200, 0]"), "model.yaml").model;
+  const Model tiny = load_model_text(with("axis: [1, 0]", "axis: [1e-200, 0]"), "model.yaml").model;
+  EXPECT_EQ(big.joints[3].axis, Vec2(1, 0));
+  EXPECT_EQ(tiny.joints[3].axis, Vec2(1, 0));
+}
+
 TEST(ModelLoader, NumbersBelowTheSmallestNormalDoubleAreRefused) {
   // A mass of 1e-320 passed "> 0" and the run stopped at t = 0 ("not finite"); a Young's modulus
   // of 1e-320 ran a link with no stiffness to the end. Refused at their keys; 0 stays 0.

@@ -86,8 +86,12 @@ bool is_study_file(const std::string& path) {
     // Read as the model loader reads: a FIFO or a device is not opened, a huge file not read
     // (YAML::LoadFile hung on a FIFO and read /dev/zero without end).
     const YAML::Node root = YAML::Load(read_input_file(path, kMaxModelFileBytes));
-    // `study:` may be left out (lash sweep names the study "study"); a model has no `model:`.
-    return root.IsMap() && (root["study"] || root["model"]);
+    // `study:` may be left out (lash sweep names the study "study"); a model has no `model:`,
+    // but a model with a stray `model:` key is still a model (its bodies say so): checked as
+    // one, it gets the one problem that key is, not one per model section "unknown in a study".
+    if (!root.IsMap()) return false;
+    if (root["study"]) return true;
+    return root["model"] && !root["bodies"] && !root["joints"];
   } catch (const std::exception&) {
     return false;
   }

@@ -343,10 +343,14 @@ class Loader {
       if (!kv.second.IsSequence() || kv.second.size() != 2 ||
           !YAML::convert<double>::decode(kv.second[0], x) ||
           !YAML::convert<double>::decode(kv.second[1], y) || !std::isfinite(x) ||
-          !std::isfinite(y)) {
+          !std::isfinite(y) || Section::subnormal(x) || Section::subnormal(y)) {
         r_.error(kv.second, s.element(),
-                 "marker '" + mk.name + "' must be [x, y] in body coordinates (m), got " +
-                     Section::kind(kv.second));
+                 "marker '" + mk.name + "' must be [x, y], finite numbers in body coordinates (m), got " +
+                     (kv.second.IsSequence() ? "[" + Section::join_scalars(kv.second) + "]"
+                                             : Section::kind(kv.second)));
+        // Still a marker: the joints naming it get no second problem ("unknown marker").
+        mk.s_P_B = Vec2::Zero();
+        out.push_back(mk);
         continue;
       }
       mk.s_P_B = Vec2(x, y);
@@ -532,10 +536,13 @@ class Loader {
         a = point(s, "guide");
         b = point(s, "slider");
         if (auto ax = s.vec2("axis", " (unit vector in the guide's frame)")) {
-          if (ax->norm() < 1e-12)
+          // Scaled by its largest entry first: [1e200, 1e200]'s norm overflows, [1e-200, 0]'s
+          // underflows; any non-zero direction is one.
+          const double largest = ax->cwiseAbs().maxCoeff();
+          if (!(largest > 0.0))
             r_.error(s.get("axis"), element, "axis must be a non-zero vector, got [0, 0]");
           else
-            j.axis = ax->normalized();
+            j.axis = (*ax / largest).normalized();
         }
       } else if (j.type == JointType::distance) {
         a = point(s, "from");
@@ -890,7 +897,12 @@ class Loader {
       l.name = name;
       auto expr = [&](Section& s, const std::string& key, std::string& out) {
         if (!s.has(key)) return;
-        out = s.get(key).IsScalar() ? s.get(key).Scalar() : "";
+        if (!s.get(key).IsScalar()) {
+          r_.error(s.get(key), element, "'" + key + "' must be a number or an expression (text), got " +
+                                            Section::kind(s.get(key)));
+          return;
+        }
+        out = s.get(key).Scalar();
         const std::string err = check_expression(out, body_names_);
         if (!err.empty()) r_.error(s.get(key), element, "bad expression in '" + key + "': " + err);
       };
@@ -952,14 +964,22 @@ class Loader {
           if (auto fb = body_ref(s, s.get("frame"))) l.frame_body = *fb;
         auto pair = [&](const std::string& key, const char* unit) -> Vec2 {
           if (!s.has(key)) return Vec2::Zero();
-          double v;
           const YAML::Node n = s.get(key);
-          if (n.IsScalar() && YAML::convert<double>::decode(n, v) && v >= 0 && std::isfinite(v))
-            return Vec2(v, v);
+          // One problem, saying what was given: a number (both axes) or a pair.
+          const std::string expected = "'" + key + "' must be a number >= 0 or a pair [x, y] of them" + unit;
+          if (n.IsScalar()) {
+            if (auto v = s.number(key, unit, [](double x) { return x >= 0 ? "" : ">= 0"; }))
+              return Vec2(*v, *v);
+            return Vec2::Zero();
+          }
+          if (!n.IsSequence()) {
+            r_.error(n, element, expected + ", got " + Section::kind(n));
+            return Vec2::Zero();
+          }
           if (auto p = s.vec2(key, unit)) {
             if ((p->array() >= 0).all()) return *p;
+            r_.error(n, element, expected + ", got [" + fmt_num(p->x()) + ", " + fmt_num(p->y()) + "]");
           }
-          r_.error(n, element, "'" + key + "' must be a number >= 0 or a pair [x, y] of them" + unit);
           return Vec2::Zero();
         };
         l.stiffness_xy = pair("stiffness", " (N/m)");
