@@ -526,6 +526,12 @@ TEST(FlexibleLink, TheModelFileNamesWhatAFlexibleLinkCannotTake) {
   EXPECT_NE(problems(head + "    flexible: {length: 1, youngs_modulus: 1e9, density: 1000}\n")
                 .find("missing required key 'section'"),
             std::string::npos);
+  // A section whose area overflows: one problem with the values, not "give the density or the
+  // mass" beside a mass that is given.
+  const std::string huge = problems(head + "    mass: 1.0\n    flexible: {length: 1, section: {circle: 1e200}, "
+                                           "youngs_modulus: 1e9}\n");
+  EXPECT_NE(huge.find("must be finite and > 0, got A = inf m²"), std::string::npos) << huge;
+  EXPECT_EQ(huge.find("give the density or the mass"), std::string::npos) << huge;
   // A good one loads, with its mass from the density.
   const Model m = load_model_text(head + bar(1e9, 2) + kSolver, "flex.yaml").model;
   EXPECT_NEAR(m.bodies[0].mass, kRho * kB * kH * kL, 1e-12);

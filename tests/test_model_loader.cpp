@@ -187,6 +187,12 @@ TEST(ModelLoader, InvalidYamlPointsAtTheSyntaxError) {
   EXPECT_EQ(d[0].file, "model.yaml");
   EXPECT_GT(d[0].line, 0);
   EXPECT_NE(d[0].message.find("not valid YAML"), std::string::npos);
+  // A tab in a line's indentation: the parser's "end of map not found" is reported at the tab.
+  // A comment indented with a tab is not taken for it.
+  const auto t = problems(with("  pin: {type", "\t# a note\n\tpin: {type"));
+  ASSERT_EQ(t.size(), 1u);
+  EXPECT_EQ(t[0].str(), "model.yaml:20:1: not valid YAML: a tab in the indentation (YAML indents "
+                        "with spaces only; the parser said 'end of map not found' at 20:2)");
 }
 
 TEST(ModelLoader, DriverOnAClearanceJointIsRejected) {

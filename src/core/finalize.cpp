@@ -4,6 +4,7 @@
 #include <cmath>
 #include <map>
 #include <set>
+#include <sstream>
 
 #include "core/elements/registry.hpp"
 
@@ -103,12 +104,18 @@ class Checker {
     if (!positive(m.length)) error(el, "length must be > 0 m");
     if (m.elements < 1 || m.elements > 1000) error(el, "elements must be 1 … 1000");
     if (!positive(s.youngs_modulus)) error(el, "youngs_modulus must be > 0 Pa");
-    if (!positive(s.area) || !positive(s.inertia))
-      error(el, "the section's area and second moment of area must be > 0");
+    if (!positive(s.area) || !positive(s.inertia)) {
+      std::ostringstream got;
+      got << "the section's area and second moment of area must be finite and > 0, got A = "
+          << s.area << " m², I = " << s.inertia << " m⁴";
+      error(el, got.str());
+    }
     if (!(s.fibre >= 0 && std::isfinite(s.fibre))) error(el, "fibre distance must be >= 0 m");
     if (!(b.structural_damping >= 0 && std::isfinite(b.structural_damping)))
       error(el, "damping (retardation time) must be >= 0 s");
-    // Mass and density: one follows from the other; both given must agree.
+    // Mass and density: one follows from the other; both given must agree (not said again for a
+    // length or section already refused: "give the density or the mass" beside a given mass).
+    if (!positive(m.length) || !positive(s.area)) return;
     if (!positive(s.density) && positive(b.mass) && positive(m.length) && positive(s.area))
       b.mesh.section.density = b.mass / (s.area * m.length);
     const double from_section = b.mesh.section.density * s.area * m.length;

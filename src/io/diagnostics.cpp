@@ -24,6 +24,26 @@ std::string join(const std::vector<Diagnostic>& d) {
 ModelError::ModelError(std::vector<Diagnostic> diagnostics)
     : std::runtime_error(join(diagnostics)), diagnostics_(std::move(diagnostics)) {}
 
+Diagnostic yaml_syntax_problem(const std::string& file, const std::string& text, int line,
+                               int column, const std::string& message) {
+  int n = 1;
+  for (size_t start = 0; start < text.size() && n <= line + 1; ++n) {
+    size_t end = text.find('\n', start);
+    if (end == std::string::npos) end = text.size();
+    size_t first = start;  // the line's first character that is not indentation
+    while (first < end && (text[first] == ' ' || text[first] == '\t')) ++first;
+    const bool content = first < end && text[first] != '#' && text[first] != '\r';
+    for (size_t i = start; content && i < first; ++i)
+      if (text[i] == '\t')
+        return {file, n, static_cast<int>(i - start) + 1, "",
+                "not valid YAML: a tab in the indentation (YAML indents with spaces only; the "
+                "parser said '" + message + "' at " + std::to_string(line) + ":" +
+                    std::to_string(column) + ")"};
+    start = end + 1;
+  }
+  return {file, line, column, "", "not valid YAML: " + message};
+}
+
 int edit_distance(const std::string& a, const std::string& b) {
   std::vector<int> prev(b.size() + 1), cur(b.size() + 1);
   std::iota(prev.begin(), prev.end(), 0);

@@ -27,6 +27,13 @@ class ModelError : public std::runtime_error {
   std::vector<Diagnostic> diagnostics_;
 };
 
+/// A file YAML cannot parse (`message` and the 1-based position it gives): the problem as the
+/// user should see it. A tab in a line's indentation at or before that position, which YAML
+/// forbids and which its parser reports only as "end of map not found" somewhere after, is
+/// reported at the tab instead.
+Diagnostic yaml_syntax_problem(const std::string& file, const std::string& text, int line,
+                               int column, const std::string& message);
+
 /// Levenshtein distance, for "did you mean".
 int edit_distance(const std::string& a, const std::string& b);
 /// The closest candidate within a small distance, or "".

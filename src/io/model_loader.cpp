@@ -1385,8 +1385,7 @@ LoadedModel load_model_text(const std::string& text, const std::string& filename
   try {
     root = YAML::Load(text);
   } catch (const YAML::Exception& e) {
-    throw ModelError({{filename, e.mark.line + 1, e.mark.column + 1, "",
-                       "not valid YAML: " + e.msg}});
+    throw ModelError({yaml_syntax_problem(filename, text, e.mark.line + 1, e.mark.column + 1, e.msg)});
   }
   if (!root.IsMap())
     throw ModelError({{filename, 1, 1, "",

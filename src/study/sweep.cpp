@@ -304,7 +304,7 @@ StudySpec load_study_text(const std::string& text, const std::string& file,
   try {
     root = YAML::Load(text);
   } catch (const YAML::Exception& e) {
-    throw ModelError({{file, e.mark.line + 1, e.mark.column + 1, "", "not valid YAML: " + e.msg}});
+    throw ModelError({yaml_syntax_problem(file, text, e.mark.line + 1, e.mark.column + 1, e.msg)});
   }
   if (!root.IsMap())
     throw ModelError({{file, 1, 1, "", "expected a study (a map with study, model, parameters, ...)"}});
