@@ -795,6 +795,29 @@ TEST(Cli, AModelFileAmongTheRunsOwnFilesIsNotReplaced) {
   fs::remove_all(dir);
 }
 
+TEST(Cli, AModelRefusedAtAssemblyIsReportedAtTheElement) {
+  // A second driver of the crank, written in the file: refused when the model is assembled,
+  // which had no line ("m.yaml: driver 'b': ..."); now at the driver, by check and run alike.
+  const fs::path dir = temp_dir("assembly_line");
+  fs::create_directories(dir);
+  std::string text = lash::test::read_file(example());
+  // After the crank's driver (its last line holds speed_rpm).
+  const size_t rpm = text.find("speed_rpm", text.find("drivers:\n"));
+  ASSERT_NE(rpm, std::string::npos);
+  text.insert(text.find('\n', rpm) + 1, "  b: {body: crank, coordinate: phi, speed_rpm: 5000}\n");
+  std::ofstream(dir / "m.yaml") << text;
+  int line = 1;
+  for (size_t i = 0; i < text.find("  b: {body"); ++i) line += text[i] == '\n';
+  const std::string said = (dir / "m.yaml").string() + ":" + std::to_string(line) +
+                           ":6: driver 'b': its equation is redundant with driver 'crank'";
+  for (const std::string args : {std::string(), " -q -o " + (dir / "out").string()}) {
+    const Result r = run_lash((args.empty() ? "check " : "run ") + (dir / "m.yaml").string() + args);
+    EXPECT_EQ(r.code, 2) << r.out;
+    EXPECT_NE(r.out.find(said), std::string::npos) << r.out;
+  }
+  fs::remove_all(dir);
+}
+
 TEST(Cli, CheckTakesAModelWithAStrayModelKeyForAModel) {
   // `model: foo` above a model's bodies: `lash check` read it as a study and listed nine
   // "study: unknown key 'bodies'" problems; `lash run` said the one that it is.
@@ -1018,7 +1041,7 @@ solver: {end_time: 0.05, output_interval: 0.001, rtol: 1.0e-8, atol: 1.0e-11}
   }
   const Result ideal = run_lash("check " + (dir / "ideal.yaml").string());
   EXPECT_EQ(ideal.code, 0) << ideal.out;
-  EXPECT_NE(ideal.out.find("ideal.yaml: warning: joint 'coupler_2': 1 of its 2 equations is "
+  EXPECT_NE(ideal.out.find("ideal.yaml:20:14: warning: joint 'coupler_2': 1 of its 2 equations is "
                            "redundant with"),
             std::string::npos)
       << ideal.out;

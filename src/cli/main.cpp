@@ -333,7 +333,7 @@ int main(int argc, char** argv) {
     try {
       lash::cli::print_modes(model, mode_count, std::cout);
     } catch (const std::exception& e) {
-      std::cerr << model_path << ": " << e.what() << "\n";
+      std::cerr << loaded.located(e.what()) << "\n";
       return 2;
     }
     return 0;
@@ -348,10 +348,10 @@ int main(int argc, char** argv) {
       lash::initial_state(model, ws);
       warnings = ws.warnings;
     } catch (const std::exception& e) {
-      std::cerr << model_path << ": " << e.what() << "\n";
+      std::cerr << loaded.located(e.what()) << "\n";
       return 2;
     }
-    for (const auto& w : warnings) std::cerr << model_path << ": warning: " << w << "\n";
+    for (const auto& w : warnings) std::cerr << loaded.located(w, "warning: ") << "\n";
     std::cout << model_path << ": ok: " << model.bodies.size() << " bodies, "
               << model.joints.size() << " joints (" << model.clearance_joint_count()
               << " with clearance), " << model.drivers.size() << " drivers, "
@@ -546,7 +546,7 @@ int main(int argc, char** argv) {
       lash::Workspace probe(model);
       lash::initial_state(model, probe);
     } catch (const std::exception& e) {
-      std::cerr << model_path << ": " << e.what() << "\nnothing was run; " << out_dir
+      std::cerr << loaded.located(e.what()) << "\nnothing was run; " << out_dir
                 << "/ is unchanged\n";
       return kExitBadInput;
     }
@@ -600,10 +600,10 @@ int main(int argc, char** argv) {
       result = lash::simulate(model, ws, progress, {}, {}, run_options);
     }
   } catch (const std::exception& e) {  // no consistent initial state
-    std::cerr << model_path << ": " << e.what() << "\n";
+    std::cerr << loaded.located(e.what()) << "\n";
     return kExitBadInput;
   }
-  for (const auto& w : result.warnings) std::cerr << model_path << ": warning: " << w << "\n";
+  for (const auto& w : result.warnings) std::cerr << loaded.located(w, "warning: ") << "\n";
   if (!result.warnings.empty()) writer->add_to_summary("warnings", result.warnings);
 
   // The results on disk whole first (the figures read timeseries.csv), then the report, then

@@ -208,6 +208,15 @@ class Loader {
  public:
   Loader(const std::string& file) { r_.file = file; }
 
+  /// Where each element read is written (LoadedModel::positions).
+  std::map<std::string, std::pair<int, int>> positions() const {
+    std::map<std::string, std::pair<int, int>> out;
+    for (const auto& [element, node] : nodes_)
+      if (node.IsDefined() && node.Mark().line >= 0)
+        out[element] = {node.Mark().line + 1, node.Mark().column + 1};
+    return out;
+  }
+
   Model load(YAML::Node root) {
     Model m;
     Section top(r_, root, root, "model",
@@ -1361,12 +1370,25 @@ LoadedModel load_root(YAML::Node root, const std::string& filename,
   LoadedModel out;
   out.model = loader.load(root);
   out.output = loader.output();
+  out.positions = loader.positions();
   out.model.source = filename;
   if (!overrides.empty()) out.resolved_yaml = YAML::Dump(root);
   return out;
 }
 
 }  // namespace
+
+std::string LoadedModel::located(const std::string& message, const std::string& label) const {
+  const std::string& file = model.source;
+  const size_t end = message.find("': ");
+  if (end != std::string::npos) {
+    const auto it = positions.find(message.substr(0, end + 1));
+    if (it != positions.end())
+      return file + ":" + std::to_string(it->second.first) + ":" + std::to_string(it->second.second) +
+             ": " + label + message;
+  }
+  return file + ": " + label + message;
+}
 
 LoadedModel load_model_text(const std::string& text, const std::string& filename,
                             const std::vector<std::string>& overrides) {
