@@ -32,6 +32,7 @@
 #include "io/diagnostics.hpp"
 #include "io/files.hpp"
 #include "io/model_loader.hpp"
+#include "io/results_writer.hpp"
 #include "study/run_analysis.hpp"
 #include "study/study_db.hpp"
 #include "study/sweep.hpp"
@@ -238,6 +239,13 @@ py::dict simulate(const CompiledModel& cm) {
   py::dict ext;
   ext["min"] = lo, ext["t_min"] = t_lo, ext["max"] = hi, ext["t_max"] = t_hi;
   d["extrema"] = ext;
+  // summary.json's blocks that are not computed from the arrays, as `lash run` writes them
+  // (JSON text, read by Result.summary).
+  nlohmann::json blocks = {{"solver", lash::solver_summary(model)},
+                           {"peaks", lash::peaks_summary(collector->extrema)}};
+  for (const auto& jt : model.joints)
+    if (jt.clearance) blocks["clearance_parameters"][jt.name] = lash::clearance_parameters(jt);
+  d["summary_blocks"] = blocks.dump();
   return d;
 }
 

@@ -445,6 +445,8 @@ class Result:
         self._initial_contact = raw["initial_contact"]
         # Exact extrema tracked between outputs (as in summary.json); absent: from the rows.
         self._extrema = raw.get("extrema")
+        # solver, peaks and each clearance joint's parameters, as `lash run` writes them.
+        self._blocks = json.loads(raw["summary_blocks"])
         self._summary: Optional[dict] = None
 
     def __getitem__(self, channel: str) -> np.ndarray:
@@ -521,9 +523,11 @@ class Result:
             onsets = kinds == "onset"
             joints[joint] = {"impacts": int(onsets.sum()), "separations": int((~onsets).sum()),
                              "contact_share": share, "free_flight_share": 1.0 - share,
-                             "max_impact_velocity": float(vel[onsets].max()) if onsets.any() else 0.0}
+                             "max_impact_velocity": float(vel[onsets].max()) if onsets.any() else 0.0,
+                             **self._blocks.get("clearance_parameters", {}).get(joint, {})}
         return {"status": dict(self.status), "channels": channels, "clearance_joints": joints,
-                "integrator": dict(self.integrator),
+                "integrator": dict(self.integrator), "solver": self._blocks["solver"],
+                "peaks": self._blocks["peaks"],
                 "max_constraint_violation": self.max_constraint_violation,
                 "model": {"name": self._compiled.name, "file": self.model.filename,
                           "overrides": list(self._overrides)}}

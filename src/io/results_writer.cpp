@@ -13,6 +13,34 @@
 
 namespace lash {
 
+nlohmann::json solver_summary(const Model& model) {
+  const SolverSettings& s = model.solver;
+  return nlohmann::json{{"integrator", s.integrator == IntegratorKind::bdf ? "bdf" : "dopri5"},
+                 {"rtol", s.rtol},
+                 {"atol", s.atol},
+                 {"end_time", s.end_time},
+                 {"output_interval", s.output_interval},
+                 {"max_step", s.max_step},
+                 {"initial_state", s.initial_state == InitialStateRule::ideal ? "ideal" : "given"},
+                 {"baumgarte_alpha", s.baumgarte_alpha},
+                 {"baumgarte_beta", s.baumgarte_beta}};
+}
+
+nlohmann::json clearance_parameters(const Joint& joint) {
+  return {{"clearance", joint.clearance->clearance},
+          {"stiffness", joint.clearance->contact.stiffness},
+          {"normal_law", std::string(normal_law_name(joint.clearance->normal_law))},
+          {"friction_law", std::string(friction_law_name(joint.clearance->friction_law))}};
+}
+
+nlohmann::json peaks_summary(const ChannelExtrema& extrema) {
+  return {{"method",
+           "tracked at every output, accepted integrator step and event; turning points "
+           "between steps refined by Brent's method on the dense output"},
+          {"refinements", extrema.refinements()},
+          {"evaluations", extrema.evaluations()}};
+}
+
 const std::vector<std::string>& ResultsWriter::run_files() {
   // summary.json first: from here on, no summary of the earlier run stands beside new rows.
   static const std::vector<std::string> files = {
@@ -208,11 +236,7 @@ RunStatus ResultsWriter::finish(const RunResult& r) {
                                    {"peak", std::max(std::abs(p.min), std::abs(p.max))}};
   }
   j["channels"] = channels;
-  j["peaks"] = {{"method",
-                 "tracked at every output, accepted integrator step and event; turning points "
-                 "between steps refined by Brent's method on the dense output"},
-                {"refinements", extrema_.refinements()},
-                {"evaluations", extrema_.evaluations()}};
+  j["peaks"] = peaks_summary(extrema_);
   json cj = json::object();
   int c = 0;
   for (const auto& jt : model_.joints) {
@@ -224,11 +248,8 @@ RunStatus ResultsWriter::finish(const RunResult& r) {
                    {"separations", s.separations},
                    {"contact_share", contact_share},
                    {"free_flight_share", 1.0 - contact_share},
-                   {"max_impact_velocity", s.max_impact_velocity},
-                   {"clearance", jt.clearance->clearance},
-                   {"stiffness", jt.clearance->contact.stiffness},
-                   {"normal_law", std::string(normal_law_name(jt.clearance->normal_law))},
-                   {"friction_law", std::string(friction_law_name(jt.clearance->friction_law))}};
+                   {"max_impact_velocity", s.max_impact_velocity}};
+    cj[jt.name].update(clearance_parameters(jt));
   }
   j["clearance_joints"] = cj;
   j["integrator"] = {{"name", r.integrator},
@@ -250,7 +271,6 @@ RunStatus ResultsWriter::finish(const RunResult& r) {
   j["max_constraint_violation"] = r.max_constraint_violation;
   j["start"] = {{"time", t_first_}, {"from", from_.empty() ? nlohmann::json() : json(from_)}};
   j["integrator"]["missed_events"] = r.missed_events;
-  const SolverSettings& s = model_.solver;
   j["model"] = {{"name", model_.name},
                 {"file", model_.source},
                 {"overrides", overrides_},
@@ -258,15 +278,7 @@ RunStatus ResultsWriter::finish(const RunResult& r) {
                 {"joints", model_.joints.size()},
                 {"clearance_joints", model_.clearance_joint_count()},
                 {"resolved", resolved_yaml_}};
-  j["solver"] = {{"integrator", s.integrator == IntegratorKind::bdf ? "bdf" : "dopri5"},
-                 {"rtol", s.rtol},
-                 {"atol", s.atol},
-                 {"end_time", s.end_time},
-                 {"output_interval", s.output_interval},
-                 {"max_step", s.max_step},
-                 {"initial_state", s.initial_state == InitialStateRule::ideal ? "ideal" : "given"},
-                 {"baumgarte_alpha", s.baumgarte_alpha},
-                 {"baumgarte_beta", s.baumgarte_beta}};
+  j["solver"] = solver_summary(model_);
   for (const auto& [key, value] : extra_.items()) j[key] = value;
   auto text = [&] { return j.dump(2, ' ', false, json::error_handler_t::replace) + "\n"; };
   try {

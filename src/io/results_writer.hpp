@@ -27,6 +27,14 @@
 
 namespace lash {
 
+/// summary.json's "solver" block: the integrator and its settings as run.
+nlohmann::json solver_summary(const Model& model);
+/// The parameters summary.json gives per clearance joint beside its contact statistics
+/// (clearance, stiffness, normal and friction law).
+nlohmann::json clearance_parameters(const Joint& joint);
+/// summary.json's "peaks" block: how the channels' extrema were found.
+nlohmann::json peaks_summary(const ChannelExtrema& extrema);
+
 class ResultsWriter : public Observer {
  public:
   /// Creates `folder` if needed, removes an earlier run's outputs and writes model_resolved.yaml

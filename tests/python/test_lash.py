@@ -73,12 +73,16 @@ def test_events_and_summary_equal_cli(runs):
         for key in ("min", "t_min", "max", "t_max", "peak", "unit", "description"):
             assert mine["channels"][name][key] == peaks[key], (name, key)
     for joint, stats in summary["clearance_joints"].items():
-        for key in ("impacts", "separations", "max_impact_velocity"):
+        for key in ("impacts", "separations", "max_impact_velocity", "clearance", "stiffness",
+                    "normal_law", "friction_law"):
             assert mine["clearance_joints"][joint][key] == stats[key], (joint, key)
         assert mine["clearance_joints"][joint]["contact_share"] == pytest.approx(
             stats["contact_share"], abs=1e-12)
     for key in ("steps", "rejected_steps", "rhs_evaluations", "events"):
         assert mine["integrator"][key] == summary["integrator"][key], key
+    # The blocks not computed from the arrays: the solver as run and how the peaks were found.
+    assert mine["solver"] == summary["solver"]
+    assert mine["peaks"] == summary["peaks"]
 
 
 def test_model_error_carries_file_line_column_like_the_cli(tmp_path):
