@@ -48,6 +48,17 @@ TEST(Report, IdealSliderCrankSectionsAndVerdict) {
   EXPECT_NEAR(p["period"].get<double>(), 0.012, 1e-12);
   EXPECT_EQ(p["points"].size(), 10u);  // sections at 0.012, 0.024, …, 0.12 (t = 0 is transient)
   EXPECT_EQ(p["times"].size(), 10u);
+  // The times in full (rounded to six digits, k·T at 4321 rpm was off by up to 1.8e-7 s).
+  const Report odd = report(read_file(example_path("flores_slider_crank_ideal.yaml")),
+                            {"solver.end_time=0.1", "solver.output_interval=1e-4",
+                             "drivers.crank.speed_rpm=4321"});
+  ASSERT_TRUE(odd.run.poincare);
+  const auto& ot = odd.data["analysis"]["poincare"]["times"];
+  ASSERT_EQ(ot.size(), odd.run.poincare->times.size());
+  for (size_t k = 0; k < ot.size(); ++k) {
+    EXPECT_EQ(ot[k].get<double>(), odd.run.poincare->times[k]);
+    EXPECT_NEAR(ot[k].get<double>(), (k + 1) * 60.0 / 4321, 1e-12);
+  }
   EXPECT_EQ(p["distinct"].get<int>(), 1);
   EXPECT_EQ(p["variables"], json({"crank.x", "crank.y"}));  // no clearance joint: body poses
   for (const auto& x : p["points"]) EXPECT_EQ(x.size(), 2u);

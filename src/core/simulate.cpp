@@ -149,12 +149,15 @@ class DenseProbe final : public StepProbe {
 }  // namespace
 
 void Simulator::hook_steps(Observer* observer) {
-  if (!(observer && observer->wants_steps())) observer = nullptr;
+  // Steps are watched for an observer that wants them, and for the plane crossings it is told of.
+  if (!(observer && (observer->wants_steps() || !planes_.empty()))) observer = nullptr;
   if (observer == stepping_) return;
   stepping_ = observer;
   if (!observer) return integrator_->set_step_hook({});
   auto probe = std::make_shared<DenseProbe>(model_, ws_, *integrator_);
   integrator_->set_step_hook([this, observer, probe](double t0, double t1) {
+    if (!planes_.empty()) plane_crossings(t0, t1, observer);
+    if (!observer->wants_steps()) return;
     // The step's end, evaluated as an output would be (the integrator's last evaluation may
     // have been exactly there), then whatever the observer probes.
     probe->t_end = t1;
@@ -169,13 +172,47 @@ void Simulator::hook_steps(Observer* observer) {
 }
 
 void Simulator::problem_events(const double* y, double* g) const {
-  // Contact, then the planes, then through the bearing: δ reaching the journal's radius,
-  // located like any event, so that a journal driven through its bearing and back between two
-  // outputs still stops the run.
-  const int nc = ws_.nc, np = static_cast<int>(planes_.size());
-  event_functions(model_, ws_, y, g, g + nc + np);
-  for (int p = 0; p < np; ++p)
-    g[nc + p] = planes_[p].direction * (y[planes_[p].index] - planes_[p].value);
+  // Contact, then through the bearing: δ reaching the journal's radius, located like any
+  // event, so that a journal driven through its bearing and back between two outputs still
+  // stops the run.
+  event_functions(model_, ws_, y, g, g + ws_.nc);
+}
+
+void Simulator::plane_crossings(double t0, double t1, Observer* observer) {
+  // Each plane's function sampled at kPlaneSamples + 1 points of the step's dense output (a
+  // state component: no evaluation), a rising sign change located by bisection to round-off of
+  // the time, then the state there evaluated and reported. The integration is not touched: a
+  // section is an observation, and restarting the integrator at each (as a contact event does)
+  // made another trajectory of a chaotic run than the one without the plane.
+  constexpr int kPlaneSamples = 8;
+  const int np = static_cast<int>(planes_.size());
+  auto g = [&](int p, double t) {
+    integrator_->dense_at(t, plane_y_);
+    return planes_[p].direction * (plane_y_[planes_[p].index] - planes_[p].value);
+  };
+  std::vector<double> found;
+  for (int p = 0; p < np; ++p) {
+    double a = t0, ga = g(p, t0);
+    for (int k = 1; k <= kPlaneSamples; ++k) {
+      const double b = k == kPlaneSamples ? t1 : t0 + (t1 - t0) * k / kPlaneSamples;
+      const double gb = g(p, b);
+      if (ga < 0.0 && gb >= 0.0) {
+        double lo = a, hi = b;
+        for (int it = 0; it < 200 && hi - lo > 4 * std::numeric_limits<double>::epsilon() * std::abs(hi); ++it) {
+          const double mid = 0.5 * (lo + hi);
+          (g(p, mid) < 0.0 ? lo : hi) = mid;
+        }
+        found.push_back(hi);
+      }
+      a = b, ga = gb;
+    }
+  }
+  std::sort(found.begin(), found.end());
+  for (const double t : found) {
+    integrator_->dense_at(t, plane_y_);
+    if (!evaluate(model_, ws_, t, plane_y_.data(), ydot_.data())) continue;
+    observer->section(t, plane_y_, ws_);
+  }
 }
 
 Simulator::Simulator(const Model& model, Workspace& ws, std::vector<SectionPlane> planes)
@@ -183,9 +220,10 @@ Simulator::Simulator(const Model& model, Workspace& ws, std::vector<SectionPlane
   const SolverSettings& s = model.solver;
   OdeProblem problem;
   problem.n = ws.ny;
-  // Per clearance joint its contact function, then the section planes, then per clearance joint
-  // its through-the-bearing function (problem_events).
-  problem.n_events = 2 * ws.nc + static_cast<int>(planes_.size());
+  // Per clearance joint its contact function, then its through-the-bearing function
+  // (problem_events); the section planes are located on each step's dense output instead
+  // (plane_crossings).
+  problem.n_events = 2 * ws.nc;
   problem.rhs = [this](double t, const double* yy, double* dy) {
     return evaluate(model_, ws_, t, yy, dy);
   };
@@ -228,6 +266,7 @@ Simulator::Simulator(const Model& model, Workspace& ws, std::vector<SectionPlane
                                                     : make_dopri5(problem, opt);
   y_.resize(ws.ny);
   y_try_.resize(ws.ny);
+  plane_y_.resize(ws.ny);
   ydot_.resize(ws.ny);
   g_event_.resize(problem.n_events);
 }
@@ -237,7 +276,7 @@ Simulator::~Simulator() = default;
 IntegratorStats Simulator::stats() const {
   IntegratorStats s = integrator_->stats();
   s.projections = projections_;
-  s.events -= through_events_;  // contact events (events.csv's rows) and section crossings
+  s.events -= through_events_;  // contact events: events.csv's rows
   return s;
 }
 const char* Simulator::integrator_name() const { return integrator_->name(); }
@@ -334,33 +373,23 @@ bool Simulator::advance_to(double t_target, Observer* observer) try {
       if (fixed) integrator_->reset(t_, y_);
       return true;
     }
-    // The integrator located an event function rising through zero. A plane crossing is a
-    // Poincaré section; a contact event flips every joint now on the far side (g_k ≥ 0), and at
-    // round-off (δ = ±1e-17) the joint with the largest g_k. δ̇⁻ is read here.
+    // The integrator located an event function rising through zero. A contact event flips
+    // every joint now on the far side (g_k ≥ 0), and at round-off (δ = ±1e-17) the joint with
+    // the largest g_k. δ̇⁻ is read here.
     problem_events(y_.data(), g_event_.data());
-    // The function the integrator located, else the one furthest past zero. (Not the largest
-    // g of all: a plane crossed long ago stays positive, in its own units, and would take every
-    // contact event for a section.)
+    // The function the integrator located, else the one furthest past zero.
     int first = adv.index;
     if (first < 0 || first >= g_event_.size()) {
       first = 0;
       for (int c = 1; c < g_event_.size(); ++c)
         if (g_event_[c] > g_event_[first]) first = c;
     }
-    const int through_first = ws_.nc + static_cast<int>(planes_.size());
+    const int through_first = ws_.nc;
     if (first >= through_first) {  // a journal through its bearing: the run stops here
       evaluate(model_, ws_, adv.t, y_.data(), ydot_.data());
       status_ = through_bearing(model_, ws_, first - through_first, adv.t);
       ++through_events_;
       return false;
-    }
-    if (first >= ws_.nc) {
-      if (observer) {
-        evaluate(model_, ws_, adv.t, y_.data(), ydot_.data());
-        observer->section(adv.t, y_, ws_);
-      }
-      integrator_->reset(adv.t, y_);
-      continue;
     }
     // Contact events that do not advance time (onset, separation, onset, ... at one instant:
     // the contact force turns the gap's rate round within round-off) would go on for ever.

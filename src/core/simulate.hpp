@@ -162,9 +162,14 @@ class Simulator {
   bool near_singular_ = false;  ///< the last step ended near a singular position
   long projections_ = 0;        ///< states moved onto the constraints there
   long through_events_ = 0;     ///< located journals through their bearings (not contact events)
-  /// The event functions of the integrated problem: the clearance joints', then the planes'.
+  /// The event functions of the integrated problem: the clearance joints' contact functions,
+  /// then their through-the-bearing functions.
   void problem_events(const double* y, double* g) const;
+  /// The planes' rising crossings inside the step [t0, t1], on its dense output, reported to
+  /// `observer` in time order (the step hook's first task).
+  void plane_crossings(double t0, double t1, Observer* observer);
   std::vector<SectionPlane> planes_;
+  Eigen::VectorXd plane_y_;
   std::unique_ptr<Integrator> integrator_;
   Eigen::VectorXd y_, y_try_, g_event_, ydot_;
   Observer* stepping_ = nullptr;  ///< the observer the step hook reports to

@@ -275,7 +275,7 @@ json report_data(const Model& model, const RunAnalysis& a) {
                       {"plane", p.planes.empty() ? json(nullptr) : json(p.planes)},
                       {"period", p.period},
                       {"discarded_periods", p.discarded_periods}, {"variables", p.variables},
-                      {"points", pts}, {"times", r6(p.times)}, {"distinct", p.distinct},
+                      {"points", pts}, {"times", p.times}, {"distinct", p.distinct},
                       {"tolerance", p.tolerance}};
     json joints = json::array();
     for (const JointSections& js : p.joints) {

@@ -199,15 +199,20 @@ class SampleAnalysis {
   void output(double t, const double* v, double angle_deg) {
     dec.add(t, std::vector<double>(v, v + channels.size()));
     if (!std::isnan(angle_deg)) angle.push_back(angle_deg);
-    if (in_angle_range(angle_deg))
+    const bool in_window = in_angle_range(angle_deg);
+    if (in_window)
       for (size_t i = 0; i < channels.size(); ++i) stats[i].add(t, v[i]);
-    if (twin) {
+    // The ideal twin compared over the same rows as the statistics (window and angle range):
+    // deviations and its own peak there.
+    if (twin && in_window && !stats.empty() && t >= stats[0].t0 && t <= stats[0].t1) {
       for (size_t i = 0; i < channels.size(); ++i) {
         const int ti = twin_index[i];
         if (ti < 0 || k_ >= twin->data[ti].size()) continue;
-        const double d = v[i] - twin->data[ti][k_];
+        const double ideal = twin->data[ti][k_];
+        const double d = v[i] - ideal;
         dev_sq[i] += d * d;
         dev_max[i] = std::max(dev_max[i], std::abs(d));
+        twin_peak[i] = std::max(twin_peak[i], std::abs(ideal));
         ++dev_n[i];
       }
     }
@@ -244,7 +249,7 @@ class SampleAnalysis {
   std::vector<ChannelStats> stats;
   const Keeper* twin = nullptr;
   std::vector<int> twin_index;
-  std::vector<double> dev_sq, dev_max;
+  std::vector<double> dev_sq, dev_max, twin_peak;
   std::vector<long> dev_n;
   std::vector<int> fft_index;
   std::vector<std::vector<double>> fft_data;
@@ -820,6 +825,7 @@ void connect(SampleAnalysis& sa, const Plan& p, const Keeper* twin,
     }
     sa.dev_sq.assign(sa.channels.size(), 0.0);
     sa.dev_max.assign(sa.channels.size(), 0.0);
+    sa.twin_peak.assign(sa.channels.size(), 0.0);
     sa.dev_n.assign(sa.channels.size(), 0);
   }
   for (const auto& f : p.fft) {
@@ -954,11 +960,12 @@ RunAnalysis analyze_samples(const Model& model, const AnalysisOptions& o, Plan& 
     st.angle1_deg = o.stats_angle1;
     out.statistics.push_back(st);
     if (twin && sa.twin_index[i] >= 0 && sa.dev_n[i] > 0) {
-      const auto& tv = twin->data[sa.twin_index[i]];
-      double ideal_peak = 0;
-      for (double v : tv) ideal_peak = std::max(ideal_peak, std::abs(v));
+      // Over the statistics' rows; over the whole run with the twin's exact extrema too (those
+      // are the whole run's: a window's peak against them was a ratio of two different spans).
+      double ideal_peak = sa.twin_peak[i];
+      const bool whole_run = std::isnan(o.stats_angle0) && o.stats_t0 <= 0.0 && o.stats_t1 >= s.end_time;
       const ChannelExtremum& te = twin->extrema.extrema()[sa.twin_index[i]];
-      if (te.seen) ideal_peak = std::max({ideal_peak, std::abs(te.min), std::abs(te.max)});
+      if (te.seen && whole_run) ideal_peak = std::max({ideal_peak, std::abs(te.min), std::abs(te.max)});
       ChannelComparison cmp;
       cmp.channel = sa.channels[i].name;
       cmp.rms_deviation = std::sqrt(sa.dev_sq[i] / sa.dev_n[i]);
