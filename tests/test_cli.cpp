@@ -810,7 +810,7 @@ TEST(Cli, AModelRefusedAtAssemblyIsReportedAtTheElement) {
   for (size_t i = 0; i < text.find("  b: {body"); ++i) line += text[i] == '\n';
   const std::string said = (dir / "m.yaml").string() + ":" + std::to_string(line) +
                            ":6: driver 'b': its equation is redundant with driver 'crank'";
-  for (const std::string args : {std::string(), " -q -o " + (dir / "out").string()}) {
+  for (const std::string& args : {std::string(), " -q -o " + (dir / "out").string()}) {
     const Result r = run_lash((args.empty() ? "check " : "run ") + (dir / "m.yaml").string() + args);
     EXPECT_EQ(r.code, 2) << r.out;
     EXPECT_NE(r.out.find(said), std::string::npos) << r.out;

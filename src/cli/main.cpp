@@ -245,8 +245,9 @@ int main(int argc, char** argv) {
             },
             "SECONDS"));
 
-  auto* check = app.add_subcommand("check", "Validate a model: list every problem with file:line:column");
-  check->add_option("model", model_path, "Model file (YAML)")->required()->check(CLI::ExistingFile);
+  auto* check = app.add_subcommand(
+      "check", "Validate a model or a study file (docs/studies.md): list every problem with file:line:column");
+  check->add_option("model", model_path, "Model or study file (YAML)")->required()->check(CLI::ExistingFile);
   check->add_option("--set", overrides, "Override a model value, KEY.PATH=VALUE, repeatable")
       ->take_all();
 
