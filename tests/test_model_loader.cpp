@@ -614,6 +614,9 @@ TEST(ModelLoader, AnElementThatIsNotAMapIsReportedAtItsLine) {
            {pin, "  pin: [1, 2]", "19:8", "joint 'pin': expected a map of keys such as {type: revolute"},
            {pin, "  pin: revolute", "19:8", "got 'revolute'"},
            {pin, "  pin:", "19:3", "joint 'pin': expected a map of keys such as"},
+           // No type at all: the missing key's node threw yaml-cpp's InvalidNode (a crash).
+           {pin, "  pin: {journal: crank.A, bearing: rod.A}", "19:8", "joint 'pin': missing 'type'"},
+           {"drivers:", "loads: {f: {point: rod.A, fx: 1}}\ndrivers:", "30:12", "load 'f': missing 'type'"},
            {pin, "  pin: {type: [revolute], journal: crank.A, bearing: rod.A}", "19:15",
             "'type' must be one word, got a list; expected one of: revolute"},
            {"drivers:\n  motor: {joint: pivot, speed_rpm: 5000}", "drivers:\n  motor: [1]", "31:10",

@@ -506,8 +506,9 @@ class Loader {
       const std::string name = kv.first.as<std::string>("");
       const std::string element = "joint '" + name + "'";
       if (!element_map(kv, element, "{type: revolute, journal: ..., bearing: ...}")) continue;
+      // (A key that is missing gives a node every accessor but IsDefined throws on.)
       const YAML::Node type_node = kv.second["type"];
-      const std::string type = type_node.IsScalar() ? type_node.Scalar() : "";
+      const std::string type = type_node.IsDefined() && type_node.IsScalar() ? type_node.Scalar() : "";
       Joint j;
       j.name = name;
       std::vector<std::string> keys{"type"};
@@ -898,7 +899,7 @@ class Loader {
       const std::string element = "load '" + name + "'";
       if (!element_map(kv, element, "{type: force, point: ..., fx: ..., fy: ...}")) continue;
       const YAML::Node tn = kv.second["type"];
-      const std::string type = tn.IsScalar() ? tn.Scalar() : "";
+      const std::string type = tn.IsDefined() && tn.IsScalar() ? tn.Scalar() : "";
       const std::vector<std::string> types{"force", "torque", "spring_damper",
                                            "torsional_spring_damper", "bushing"};
       nodes_[element] = kv.second;
