@@ -152,7 +152,7 @@ TEST(StudyFile, CrossZipRangesAndCases) {
       "parameters:\n  joints.rod_slider.clearance: {from: 1.0e-5, to: 1.0e-3, count: 3, scale: log}\n");
   const auto lr = study_runs(log);
   EXPECT_DOUBLE_EQ(lr[0].numbers[0], 1e-5);
-  EXPECT_NEAR(lr[1].numbers[0], 1e-4, 1e-18);
+  EXPECT_EQ(lr[1].numbers[0], 1e-4);  // in decades: exactly (exp and log gave 9.99999999999999e-05)
   EXPECT_DOUBLE_EQ(lr[2].numbers[0], 1e-3);
 
   // Ranges at the ends of the doubles: every level finite (1e308 to 1e308 gave inf).
@@ -272,6 +272,19 @@ TEST(StudyFile, ProblemsAreLocatedInTheStudyFile) {
   EXPECT_NE(problems("parameters:\n  drivers.crank.speed_rpm: {values: [1]}\n  Drivers.crank.speed_rpm: {values: [2]}\n")
                 .find("given twice"),
             std::string::npos);
+  // Nor like sections.csv's columns (a case parameter 'value' gave a header with two).
+  for (const char* name : {"k", "t", "channel", "value"})
+    EXPECT_NE(problems(std::string("parameters:\n  ") + name + ": {cases: {a: {}, b: {}}}\n")
+                  .find("a name every run's row has"),
+              std::string::npos)
+        << name;
+  // An empty map of parameters says so; count 1 with two different ends drops one: refused.
+  EXPECT_NE(problems("parameters: {}\n").find("parameters: empty"), std::string::npos);
+  EXPECT_NE(problems("parameters:\n  drivers.crank.speed_rpm: {from: 4000, to: 5000, count: 1}\n")
+                .find("s.yaml:4:58: parameter 'drivers.crank.speed_rpm': count 1 gives from only, but to (5000) differs"),
+            std::string::npos)
+      << problems("parameters:\n  drivers.crank.speed_rpm: {from: 4000, to: 5000, count: 1}\n");
+  EXPECT_EQ(problems("parameters:\n  drivers.crank.speed_rpm: {from: 4000, to: 4000, count: 1}\n"), "no error");
 }
 
 TEST(StudyRun, ABadParameterCombinationIsRecordedNotThrown) {
@@ -297,6 +310,28 @@ TEST(StudyRun, ABadParameterCombinationIsRecordedNotThrown) {
   const RunRecord back = record_from_json(nlohmann::json::parse(to_json(good).dump()));
   EXPECT_EQ(to_json(back), to_json(good));
   EXPECT_EQ(back.section_values, good.section_values);
+}
+
+TEST(StudyRun, ARunWhoseDriverStandsStillHasNoTransientInPeriods) {
+  // Speed 0 in one level: the study is not refused for it (it was, when that level came first),
+  // and that run is an error naming why, instead of completing with statistics from t = 0 (it
+  // did, when it came later).
+  for (const char* levels : {"[0, 4000]", "[4000, 0]"}) {
+    SCOPED_TRACE(levels);
+    const StudySpec spec = from_text(std::string("set: {solver.end_time: 0.03}\n"
+                                                 "parameters:\n  drivers.crank.speed_rpm: {values: ") +
+                                     levels + "}\ntransient: {periods: 1}\n");
+    for (const auto& run : study_runs(spec)) {
+      const RunRecord r = run_study_point(spec, run);
+      if (run.values[0] == "0") {
+        EXPECT_EQ(r.status, "error");
+        EXPECT_NE(r.message.find("driver 'crank' does not turn in this run (speed 0)"), std::string::npos)
+            << r.message;
+      } else {
+        EXPECT_EQ(r.status, "completed") << r.message;
+      }
+    }
+  }
 }
 
 TEST(StudyRun, ALyapunovExponentNotComputedIsSaid) {

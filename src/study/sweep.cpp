@@ -204,10 +204,17 @@ void read_parameter(Reader& r, const YAML::Node& key, const YAML::Node& v, Study
       r.error(v, where + ": a logarithmic range needs from > 0 and to > 0");
       return;
     }
+    if (n == 1 && a != b) {
+      r.error(v["count"], where + ": count 1 gives from only, but to (" + number_text(b) +
+                              ") differs; give count >= 2 for both ends, or values: [" + number_text(a) + "]");
+      return;
+    }
     for (long i = 0; i < n; ++i) {
       const double f = n == 1 ? 0.0 : static_cast<double>(i) / (n - 1);
       // (a·(n−1−i) + b·i)/(n−1): 0.05e-3 to 0.5e-3 in 10 steps gives 1e-4, not 9.9999999999999991e-05.
-      double x = p.log ? std::exp(std::log(a) + f * (std::log(b) - std::log(a)))
+      // Logarithmic levels in decades (log10, pow of 10): 1e-5 to 1e-3 in 3 gives 1e-4 exactly,
+      // where exp and log gave 9.99999999999999e-05.
+      double x = p.log ? std::pow(10.0, std::log10(a) + f * (std::log10(b) - std::log10(a)))
                        : n == 1 ? a : (a * (n - 1 - i) + b * i) / (n - 1);
       // Near the largest double that sum overflows (from: 1e308 gave inf); this form cannot.
       if (!std::isfinite(x)) x = a * (1.0 - f) + b * f;
@@ -334,7 +341,9 @@ StudySpec load_study_text(const std::string& text, const std::string& file,
   }
   const YAML::Node params = root["parameters"];
   if (!params || !params.IsMap() || params.size() == 0) {
-    r.error(params ? params : root, "parameters: expected a map of model path (or case name) to its levels");
+    r.error(params ? params : root, params && params.IsMap()
+                                        ? "parameters: empty; give at least one model path (or case name) and its levels"
+                                        : "parameters: expected a map of model path (or case name) to its levels");
     throw ModelError(r.list);
   }
   for (const auto& kv : params) read_parameter(r, kv.first, kv.second, spec, read);
@@ -345,8 +354,10 @@ StudySpec load_study_text(const std::string& text, const std::string& file,
       for (char& c : t) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
       return t;
     };
+    // (k, t, channel and value: the columns of sections.csv, beside the parameters there.)
     std::set<std::string> seen = {"run", "status", "message", "verdict", "t_reached", "wall_seconds",
-                                   "steps", "rhs_evaluations", "events", "worker", "finished"};
+                                   "steps", "rhs_evaluations", "events", "worker", "finished",
+                                   "k", "t", "channel", "value"};
     const std::set<std::string> reserved = seen;
     auto metric_like = [](const std::string& n) {  // metric names share the rows of runs.csv
       for (const char* tail : {".peak", ".max", ".min", ".rms", ".impacts", ".impact_share",
@@ -592,7 +603,9 @@ StudySpec load_study_text(const std::string& text, const std::string& file,
     }
   }
   const LoadedModel& lm0 = *loaded[first_ok];
-  const Driver* drv0 = period_driver(lm0.model, "");
+  // (A run whose driver stands still, speed 0, has no period but the study's others may: its
+  // own error, transient_end.)
+  const Driver* drv0 = rotary_driver(lm0.model, "");
   const bool constant_speed = drv0 && drv0->profile == DriverProfile::constant_speed;
   if (!constant_speed && spec.discard_time < 0 && root["transient"] && root["transient"]["periods"])
     r.error(root["transient"], "transient: periods needs a constant-speed rotary driver, which the "
@@ -844,6 +857,15 @@ class Keep : public Observer {
 /// when it is not shorter than the run.
 double transient_end(const StudySpec& spec, const Model& model, const Driver* drv, double t_begin) {
   const double period = drv ? 2 * M_PI / std::abs(drv->speed) : 0.0;
+  // A transient in periods of a constant-speed driver this run stops (speed 0) has no length:
+  // this run's error, not a run whose statistics silently include its start.
+  if (spec.discard_time < 0 && spec.discard_periods > 0 && period == 0.0)
+    if (const Driver* still = rotary_driver(model, "");
+        still && still->profile == DriverProfile::constant_speed && still->speed == 0.0)
+      throw std::invalid_argument(fmt::format(
+          "driver '{}' does not turn in this run (speed 0), so a transient of {} periods has no "
+          "length; give the transient in seconds (transient: {{time: S}})",
+          still->name, spec.discard_periods));
   const double t_transient =
       t_begin + (spec.discard_time >= 0 ? spec.discard_time : period > 0 ? spec.discard_periods * period : 0.0);
   if (t_transient >= model.solver.end_time)
