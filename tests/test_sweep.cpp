@@ -812,6 +812,25 @@ TEST(SweepCli, AFailingRunIsRecordedAndTheRestComplete) {
   fs::remove_all(dir);
 }
 
+TEST(SweepCli, AStudyOfCasesOnlyReportsItsMetricsAsATable) {
+  // No numeric parameter to plot against: the report showed the status table only, and none of
+  // the metrics runs.csv has. Now a table of them, one row per completed run.
+  const fs::path dir = temp_dir("cases_report");
+  const fs::path study = write_study(
+      dir, "set: {solver.end_time: 0.03}\n"
+           "parameters:\n  gap: {cases: {small: {joints.rod_slider.clearance: 1.0e-4}, "
+           "large: {joints.rod_slider.clearance: 3.0e-4}}}\n"
+           "transient: {periods: 1}\n");
+  ASSERT_EQ(lash_cmd("sweep " + study.string() + " -q -o " + (dir / "out").string()).code, 0);
+  ASSERT_EQ(lash_cmd("report " + (dir / "out").string()).code, 0);
+  const std::string html = lash::test::read_file((dir / "out" / "study_report.html").string());
+  EXPECT_NE(html.find("<h2>Metrics</h2><table><tr><th>run</th><th>gap</th>"), std::string::npos);
+  EXPECT_NE(html.find("<th>rod_slider.Fn.peak</th>"), std::string::npos);
+  EXPECT_NE(html.find("<td>small</td>"), std::string::npos);
+  EXPECT_NE(html.find("<td>large</td>"), std::string::npos);
+  fs::remove_all(dir);
+}
+
 TEST(SweepCli, AStudyThatCannotRunIsRefusedWithItsLocation) {
   const fs::path dir = temp_dir("refused");
   const fs::path study = write_study(dir, "parameters:\n  drivers.crank.speed_rpm: {values: [1000]}\ncombine: crossed\n");

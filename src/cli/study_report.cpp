@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <set>
 #include <sstream>
 
 #include "cli/sweep.hpp"
@@ -174,7 +175,17 @@ std::string write_study_report(const std::string& folder) {
   h << "<h1>" << esc(t.name) << "</h1><p class=\"muted\">" << t.rows.size() << " of " << t.total_runs
     << " runs recorded, " << failed << " failed. Parameters: ";
   for (size_t p = 0; p < t.parameters.size(); ++p) h << (p ? ", " : "") << "<code>" << esc(t.parameters[p]) << "</code>";
-  h << ". Values after the transient; data in study.db, runs.csv and sections.csv.</p>";
+  h << ". Values after the transient; data in study.db, runs.csv and sections.csv. Runs that did "
+       "not complete are not plotted (their values cover part of the run): they are listed under "
+       "Failed runs.</p>";
+  std::set<int> completed;
+  for (const auto& row : t.rows)
+    if (row.status == "completed") completed.insert(row.run);
+  // Metrics plotted or tabulated: peaks, impacts, contact shares, the exponent.
+  std::vector<std::string> names;
+  for (const auto& row : t.rows)
+    for (const auto& [n, v] : row.metrics)
+      if (std::find(names.begin(), names.end(), n) == names.end() && plotted_metric(n)) names.push_back(n);
 
   if (xp >= 0) {
     const std::string xlabel = t.parameters[xp];
@@ -203,17 +214,13 @@ std::string write_study_report(const std::string& folder) {
       for (size_t c = 0; c < t.section_channels.size(); ++c) {
         std::vector<std::pair<double, double>> pts;
         std::vector<int> g;
-        for (const auto& [run, v] : t.points[c]) pts.push_back({x_of[run], v}), g.push_back(group_of[run]);
+        for (const auto& [run, v] : t.points[c])
+          if (completed.count(run)) pts.push_back({x_of[run], v}), g.push_back(group_of[run]);
         h << plot(t.section_channels[c] + " at the sections", xlabel, t.section_channels[c], pts, false,
                   log_x, g, groups);
       }
     }
-    // Metrics against the parameter: peaks, impacts, contact shares, the exponent.
-    std::vector<std::string> names;
-    for (const auto& row : t.rows)
-      for (const auto& [n, v] : row.metrics)
-        if (std::find(names.begin(), names.end(), n) == names.end() && plotted_metric(n))
-          names.push_back(n);
+    // Metrics against the parameter.
     if (!names.empty()) h << "<h2>Metrics</h2>";
     // Lines when the numeric parameter alone (with the colour's) tells the runs apart.
     const bool several = t.parameters.size() > (gp >= 0 ? 2u : 1u);
@@ -222,9 +229,29 @@ std::string write_study_report(const std::string& folder) {
       std::vector<int> g;
       for (const auto& row : t.rows)
         for (const auto& [m, v] : row.metrics)
-          if (m == n) pts.push_back({row.numbers[xp], v}), g.push_back(group_of[row.run]);
+          if (m == n && row.status == "completed")
+            pts.push_back({row.numbers[xp], v}), g.push_back(group_of[row.run]);
       h << plot(n, xlabel, n, pts, !several, log_x, g, groups);
     }
+  } else if (!names.empty()) {
+    // No numeric parameter (cases only): no axis to plot against; the metrics as a table, one
+    // row per completed run.
+    h << "<h2>Metrics</h2><table><tr><th>run</th>";
+    for (const auto& p : t.parameters) h << "<th>" << esc(p) << "</th>";
+    for (const auto& n : names) h << "<th>" << esc(n) << "</th>";
+    h << "</tr>";
+    for (const auto& row : t.rows) {
+      if (row.status != "completed") continue;
+      h << "<tr><td class=\"n\">" << row.run << "</td>";
+      for (const auto& v : row.values) h << "<td>" << esc(v) << "</td>";
+      for (const auto& n : names) {
+        const auto it = std::find_if(row.metrics.begin(), row.metrics.end(),
+                                     [&](const auto& mv) { return mv.first == n; });
+        h << "<td class=\"n\">" << (it != row.metrics.end() ? num(it->second) : std::string()) << "</td>";
+      }
+      h << "</tr>";
+    }
+    h << "</table>";
   }
 
   h << "<h2>Failed runs</h2>";
