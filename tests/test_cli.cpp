@@ -413,6 +413,12 @@ TEST(Cli, TuneAbsorberRejectsBadInputWithExitTwo) {
        "expected exactly one of --primary-mass or --absorber-mass, got neither"},
       {"--frequency 25 --mass-ratio 0.05 --primary-mass 2 --attach ground.O",
        "--attach: expected a point on the vibrating link, got 'ground.O'"},
+      // Two dots named no point ('frame: a' in the snippet); the snippet's own body, a bushing
+      // from the absorber to itself.
+      {"--frequency 25 --mass-ratio 0.05 --primary-mass 2 --attach a.b.c",
+       "--attach: expected BODY or BODY.MARKER (body: letters, digits, _), got 'a.b.c'"},
+      {"--frequency 25 --mass-ratio 0.05 --primary-mass 2 --attach absorber.P",
+       "is on the body the snippet adds ('absorber')"},
       {"--mass-ratio 0.05 --primary-mass 2", "--frequency is required"},
       {"--frequency 25 --mass-ratio abc --primary-mass 2", "--mass-ratio"},
   };

@@ -29,7 +29,8 @@ void require_point(const std::string& point) {
   for (char ch : body) ok = ok && (std::isalnum(static_cast<unsigned char>(ch)) || ch == '_');
   if (body.size() < point.size()) {
     const std::string marker = point.substr(body.size() + 1);
-    ok = ok && !marker.empty() && marker.find_first_of(" \t:#,[]{}\"'") == std::string::npos;
+    // (One dot: BODY.MARKER; a.b.c named no point and gave a snippet with 'frame: a'.)
+    ok = ok && !marker.empty() && marker.find_first_of(" \t:#,[]{}\"'.") == std::string::npos;
   }
   if (!ok)
     throw std::invalid_argument(fmt::format(
@@ -38,6 +39,11 @@ void require_point(const std::string& point) {
     throw std::invalid_argument(fmt::format(
         "--attach: expected a point on the vibrating link, got '{}' (on the ground an absorber "
         "does nothing)",
+        point));
+  if (body == "absorber")
+    throw std::invalid_argument(fmt::format(
+        "--attach: '{}' is on the body the snippet adds ('absorber'): the bushing would join it "
+        "to itself; name a point of the vibrating link",
         point));
 }
 
