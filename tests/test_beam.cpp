@@ -169,6 +169,12 @@ TEST(Beam, AxialTipLoad) {
   EXPECT_NEAR((q[4 * m.elements] - m.length) / (p * m.length / ea), 1.0, 1e-4);
   EXPECT_NEAR(resultants(m, q, 0.3).axial_force / p, 1.0, 1e-4);
   EXPECT_NEAR(resultants(m, q, 0.3).stress / (p / m.section.area), 1.0, 1e-4);
+  // At 5 % strain N is still the load it holds (EA ε, the Green–Lagrange force, read P/λ).
+  const double big = 0.05 * ea;
+  f[4 * m.elements] = big;
+  const Eigen::VectorXd qb = clamped_static(m, f, 10);
+  for (const double x : {0.1, 0.3, 0.5 * m.length})
+    EXPECT_NEAR(resultants(m, qb, x).axial_force / big, 1.0, 1e-6) << x;
 }
 
 TEST(Beam, CantileverFrequenciesConvergeToEulerBernoulli) {

@@ -252,7 +252,10 @@ Resultants resultants(const Mesh& m, const Eigen::VectorXd& q, double x) {
   const PointStrain p = point_strain(loc.xi, m.element_length(), q.segment<8>(4 * loc.element));
   const Section& s = m.section;
   Resultants r;
-  r.axial_force = s.youngs_modulus * s.area * p.eps;
+  // The force carried by the stretched section: the strain energy EA/2 ∫ ε² dx with the
+  // Green–Lagrange ε = (λ² − 1)/2, differentiated by the stretch λ = |r'|, is EA ε λ. EA ε alone
+  // (the second Piola–Kirchhoff force) read 9764 N in a bar holding 10 000 N at 2.4 % strain.
+  r.axial_force = s.youngs_modulus * s.area * p.eps * std::sqrt(p.g2);
   r.bending_moment = s.youngs_modulus * s.inertia * p.kappa;
   r.stress = std::abs(r.axial_force / s.area) + std::abs(r.bending_moment) * s.fibre / s.inertia;
   return r;

@@ -111,8 +111,9 @@ Vec2 slope(const Mesh& m, const Eigen::VectorXd& q, double x);
 /// left of the chord (m).
 double chord_deflection(const Mesh& m, const Eigen::VectorXd& q, double x);
 
-/// Stress resultants at one point: axial force N = EA ε, bending moment M = EI κ, and the
-/// largest normal stress |N/A| + |M| c/I (a beam's von Mises stress, shear neglected).
+/// Stress resultants at one point: axial force N = EA ε λ (ε the Green–Lagrange strain, λ = |r'|
+/// the stretch: the force the stretched section carries), bending moment M = EI κ, and the
+/// largest normal stress |N/A| + |M| c/I (A, c and I of the undeformed section; shear neglected).
 struct Resultants {
   double axial_force = 0.0;     ///< N
   double bending_moment = 0.0;  ///< N·m
