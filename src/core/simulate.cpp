@@ -232,7 +232,7 @@ Simulator::Simulator(const Model& model, Workspace& ws, std::vector<SectionPlane
   // constraints after each DOPRI5 step, and once on entering the near-singular window under
   // BDF, whose every projection restarts CVODE at first order (projecting each step there took
   // 10⁵ steps per passage); unless that would move an event function across zero (a contact
-  // onset or separation, or a section plane, that no step located).
+  // onset or separation that no step located).
   const bool every_step = s.integrator != IntegratorKind::bdf;
   problem.project = [this, every_step](double t, Eigen::VectorXd& yy) {
     if (!ws_.solver || !ws_.solver->ldlt.near_singular()) {
@@ -384,10 +384,9 @@ bool Simulator::advance_to(double t_target, Observer* observer) try {
       for (int c = 1; c < g_event_.size(); ++c)
         if (g_event_[c] > g_event_[first]) first = c;
     }
-    const int through_first = ws_.nc;
-    if (first >= through_first) {  // a journal through its bearing: the run stops here
+    if (first >= ws_.nc) {  // a journal through its bearing: the run stops here
       evaluate(model_, ws_, adv.t, y_.data(), ydot_.data());
-      status_ = through_bearing(model_, ws_, first - through_first, adv.t);
+      status_ = through_bearing(model_, ws_, first - ws_.nc, adv.t);
       ++through_events_;
       return false;
     }
