@@ -91,3 +91,32 @@ TEST(NumberFormat, ShortestNumberReadsBackExactly) {
   for (double v : {0.1 + 0.2, 3666.6666666666665, 1e-300, 6.02214076e23, 5e15 + 1})
     EXPECT_EQ(std::strtod(lash::shortest_number(v).c_str(), nullptr), v) << lash::shortest_number(v);
 }
+
+TEST(NumberFormat, ShortestNumberIsTheFewestDigitsOfPercentG) {
+  // The reference: %.pg for p = 1, 2, … until it reads back. shortest_number takes p from the
+  // shortest round-trip digits instead; next to a power of two those are not always %g's.
+  auto reference = [](double v) {
+    char buf[32];
+    if (v == std::floor(v) && std::abs(v) < 1e15) {
+      std::snprintf(buf, sizeof buf, "%.0f", v);
+      return std::string(buf);
+    }
+    for (int p = 1; p <= 17; ++p) {
+      std::snprintf(buf, sizeof buf, "%.*g", p, v);
+      if (std::strtod(buf, nullptr) == v) break;
+    }
+    return std::string(buf);
+  };
+  std::mt19937_64 bits(7);
+  for (int e = -1074; e <= 1023; ++e) {
+    const double p = std::ldexp(1.0, e);
+    for (double v : {p, std::nextafter(p, 0.0), std::nextafter(p, INFINITY), -p})
+      ASSERT_EQ(lash::shortest_number(v), reference(v)) << std::hexfloat << v;
+  }
+  for (int i = 0; i < 200000; ++i) {
+    double v;
+    const unsigned long long b = bits();
+    std::memcpy(&v, &b, sizeof v);
+    if (std::isfinite(v)) ASSERT_EQ(lash::shortest_number(v), reference(v)) << std::hexfloat << v;
+  }
+}

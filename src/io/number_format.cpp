@@ -119,9 +119,18 @@ std::string shortest_number(double v) {
     std::snprintf(buf, sizeof buf, "%.0f", v);
     return buf;
   }
-  for (int p = 1; p <= 17; ++p) {
-    std::snprintf(buf, sizeof buf, "%.*g", p, v);
-    if (std::strtod(buf, nullptr) == v) break;
+  // The fewest significant digits that read back as v, written as %g writes them: the count
+  // from the shortest round-trip form (std::to_chars), checked, and raised in the rare case
+  // where the shortest digits are not the correctly rounded ones (next to a power of two).
+  const std::to_chars_result shortest =
+      std::to_chars(buf, buf + sizeof buf, v, std::chars_format::scientific);
+  int digits = 0;
+  for (const char* c = buf; c != shortest.ptr && *c != 'e'; ++c) digits += *c >= '0' && *c <= '9';
+  for (int p = std::max(digits, 1); p <= 17; ++p) {
+    char* end = std::to_chars(buf, buf + sizeof buf - 1, v, std::chars_format::general, p).ptr;
+    double back = 0.0;
+    std::from_chars(buf, end, back);
+    if (back == v || p == 17) return std::string(buf, end);
   }
   return buf;
 }

@@ -7,6 +7,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <chrono>
+#include <charconv>
 #include <cmath>
 #include <filesystem>
 #include <limits>
@@ -221,8 +222,10 @@ void read_parameter(Reader& r, const YAML::Node& key, const YAML::Node& v, Study
       // Rounded to 15 significant digits, the levels are the decimal numbers meant (1e-4, not
       // 9.999999999999999e-05); the end point exactly as written.
       char buf[32];
-      std::snprintf(buf, sizeof buf, "%.15g", x);
-      const double rounded = std::strtod(buf, nullptr);  // inf past the largest double: x then
+      double rounded = x;
+      char* end = std::to_chars(buf, buf + sizeof buf, x, std::chars_format::general, 15).ptr;
+      // Past the largest double the rounded text reads back out of range: x then.
+      if (std::from_chars(buf, end, rounded).ec != std::errc()) rounded = x;
       const double xv = i == n - 1 && n > 1 ? b : std::isfinite(rounded) ? rounded : x;
       p.numbers.push_back(xv);
       p.values.push_back(number_text(xv));
