@@ -13,6 +13,7 @@
 #include <map>
 #include <random>
 #include <set>
+#include <thread>
 #include <iostream>
 
 #include "io/diagnostics.hpp"
@@ -374,8 +375,16 @@ int SweepCommand::run(std::atomic<int>& interrupt, const std::function<void()>& 
       size_t next = 0;
       int active = size - 1;
       while (active > 0) {
+        // Polled with growing pauses (up to 2 ms) rather than MPI_Probe, which Open MPI answers
+        // by spinning: this rank only hands out runs, and spinning took a whole core from them.
         MPI_Status st;
-        MPI_Probe(MPI_ANY_SOURCE, kTagResult, MPI_COMM_WORLD, &st);
+        int arrived = 0;
+        for (auto pause = std::chrono::microseconds(20);;
+             pause = std::min(2 * pause, std::chrono::microseconds(2000))) {
+          MPI_Iprobe(MPI_ANY_SOURCE, kTagResult, MPI_COMM_WORLD, &arrived, &st);
+          if (arrived) break;
+          std::this_thread::sleep_for(pause);
+        }
         int n = 0;
         MPI_Get_count(&st, MPI_CHAR, &n);
         std::string msg(n, '\0');
