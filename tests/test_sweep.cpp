@@ -828,6 +828,13 @@ TEST(SweepCli, AStudyOfCasesOnlyReportsItsMetricsAsATable) {
   EXPECT_NE(html.find("<th>rod_slider.Fn.peak</th>"), std::string::npos);
   EXPECT_NE(html.find("<td>small</td>"), std::string::npos);
   EXPECT_NE(html.find("<td>large</td>"), std::string::npos);
+  EXPECT_NE(html.find("data in study.db, runs.csv, sections.csv ("), std::string::npos);
+  // A sweep killed before its end leaves study.db without the CSV files: the report named them.
+  fs::remove(dir / "out" / "runs.csv");
+  fs::remove(dir / "out" / "sections.csv");
+  ASSERT_EQ(lash_cmd("report " + (dir / "out").string()).code, 0);
+  const std::string killed = lash::test::read_file((dir / "out" / "study_report.html").string());
+  EXPECT_NE(killed.find("data in study.db ("), std::string::npos);
   fs::remove_all(dir);
 }
 

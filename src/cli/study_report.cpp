@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <map>
 #include <set>
 #include <sstream>
@@ -175,7 +176,12 @@ std::string write_study_report(const std::string& folder) {
   h << "<h1>" << esc(t.name) << "</h1><p class=\"muted\">" << t.rows.size() << " of " << t.total_runs
     << " runs recorded, " << failed << " failed. Parameters: ";
   for (size_t p = 0; p < t.parameters.size(); ++p) h << (p ? ", " : "") << "<code>" << esc(t.parameters[p]) << "</code>";
-  h << ". Values after the transient; data in study.db, runs.csv and sections.csv. Runs that did "
+  // The CSV files are written at the end of a sweep: one killed before it has study.db only.
+  std::string data = "study.db";
+  for (const char* csv : {"runs.csv", "sections.csv"})
+    if (std::filesystem::is_regular_file(std::filesystem::path(folder) / csv)) data += std::string(", ") + csv;
+  h << ". Values after the transient; data in " << data
+    << " (runs.csv and sections.csv are written at the end of every sweep). Runs that did "
        "not complete are not plotted (their values cover part of the run): they are listed under "
        "Failed runs.</p>";
   std::set<int> completed;
