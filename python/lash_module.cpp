@@ -183,6 +183,7 @@ py::dict run_result_dict(const lash::RunResult& r) {
   integ["rhs_evaluations"] = r.stats.rhs_evaluations;
   integ["events"] = r.stats.events;
   integ["missed_events"] = r.missed_events;
+  integ["projections"] = r.stats.projections;
   integ["wall_seconds"] = r.wall_seconds;
   integ["outputs"] = r.outputs;
   d["integrator"] = integ;
@@ -218,6 +219,18 @@ py::dict simulate(const CompiledModel& cm) {
   };
   const lash::RunResult r = run_interruptible(work, interrupt);
   py::dict d = run_result_dict(r);
+  {
+    // What y holds, entry by entry, and each clearance joint's contact mode (final_state.json's
+    // names and modes).
+    py::dict fs = d["final_state"];
+    fs["names"] = lash::state_names(model, lash::Workspace(model));
+    py::dict modes;
+    const std::vector<std::string> names = clearance_joint_names(model);
+    for (size_t k = 0; k < names.size() && k < r.final_state.modes.size(); ++k)
+      modes[py::str(names[k])] = r.final_state.modes[k].in_contact;
+    fs["modes"] = modes;
+    fs["step"] = r.final_state.step;
+  }
   const auto rows = static_cast<py::ssize_t>(collector->time.size());
   const auto cols = static_cast<py::ssize_t>(cm.channels.size());
   d["time"] = to_numpy(std::move(collector->time));
@@ -242,7 +255,10 @@ py::dict simulate(const CompiledModel& cm) {
   // summary.json's blocks that are not computed from the arrays, as `lash run` writes them
   // (JSON text, read by Result.summary).
   nlohmann::json blocks = {{"solver", lash::solver_summary(model)},
-                           {"peaks", lash::peaks_summary(collector->extrema)}};
+                           {"peaks", lash::peaks_summary(collector->extrema)},
+                           {"model_counts", {{"bodies", model.bodies.size()},
+                                             {"joints", model.joints.size()},
+                                             {"clearance_joints", model.clearance_joint_count()}}}};
   for (const auto& jt : model.joints)
     if (jt.clearance) blocks["clearance_parameters"][jt.name] = lash::clearance_parameters(jt);
   d["summary_blocks"] = blocks.dump();
@@ -321,7 +337,8 @@ py::dict analyze(const CompiledModel& cm, const py::dict& options) {
     pd["planes"] = p.planes;
     pd["period"] = p.period;
     pd["discarded_periods"] = p.discarded_periods;
-    const size_t width = p.points.empty() ? 0 : p.points.front().size();
+    // One column per variable, also with no point (shape (0, 2k)).
+    const size_t width = p.points.empty() ? p.variables.size() : p.points.front().size();
     std::vector<double> flat;
     for (const auto& pt : p.points) flat.insert(flat.end(), pt.begin(), pt.end());
     pd["points"] = to_numpy(std::move(flat), {static_cast<py::ssize_t>(p.points.size()),
@@ -710,6 +727,12 @@ PYBIND11_MODULE(_lash, m) {
                 "classify_motion: expected 0 <= distinct <= sections (distinct points among the "
                 "sections taken), got distinct " + std::to_string(distinct) + ", sections " +
                 std::to_string(sections));
+          if (std::isinf(lyapunov))
+            throw std::invalid_argument("classify_motion: lyapunov must be a finite exponent (1/s), or "
+                                        "NaN when none was computed; got " + number(lyapunov));
+          if (!std::isfinite(min_end))
+            throw std::invalid_argument("classify_motion: min_end_time must be a finite time (s), got " +
+                                        number(min_end));
           const lash::Verdict v = lash::classify_motion(lyapunov, period, distinct, sections, peaks, min_end);
           return py::make_tuple(v.kind, v.evidence);
         },
@@ -724,11 +747,14 @@ PYBIND11_MODULE(_lash, m) {
                               {{"times", times.size()}, {"onset", onset.size()},
                                {"velocities", velocities.size()}});
           check_non_decreasing("contact_modes", "times", times);
+          if (!std::isfinite(t0) || !std::isfinite(t1))
+            throw std::invalid_argument("contact_modes: t0 and t1 must be finite times (s), got t0 = " +
+                                        number(t0) + ", t1 = " + number(t1));
           if (!(t0 <= t1))
             throw std::invalid_argument("contact_modes: expected t0 <= t1, got t0 = " + number(t0) +
                                         ", t1 = " + number(t1));
-          if (!(continuous_time >= 0))
-            throw std::invalid_argument("contact_modes: continuous_time must be >= 0 s, got " +
+          if (!(continuous_time >= 0) || !std::isfinite(continuous_time))
+            throw std::invalid_argument("contact_modes: continuous_time must be a finite time >= 0 s, got " +
                                         number(continuous_time));
           return modes_dict(lash::contact_modes(times, onset, velocities, in_contact_at_t0, t0, t1,
                                                 continuous_time));

@@ -47,7 +47,9 @@ def _yaml_value(value: Any) -> str:
     if isinstance(value, (bool, np.bool_)):
         return "true" if value else "false"
     if isinstance(value, (int, float, np.floating, np.integer)):
-        return repr(float(value)) if isinstance(value, (float, np.floating)) else str(int(value))
+        if isinstance(value, (float, np.floating)):
+            return repr(_real("value", value))
+        return str(int(value))
     if isinstance(value, str):
         return value
     if isinstance(value, (list, tuple, dict, np.ndarray)):
@@ -62,6 +64,10 @@ def _plain(value: Any) -> Any:
         return {k: _plain(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
         return [_plain(v) for v in value]
+    if isinstance(value, np.floating) and value.dtype.itemsize < 8:
+        return _real("value", value)  # np.float32(0.3) is 0.3, as _real takes it
+    if isinstance(value, np.ndarray):
+        return [_plain(v) for v in value]  # element by element: narrow floats as above
     if not isinstance(value, (str, bytes)) and hasattr(value, "tolist"):
         return _plain(value.tolist())
     return value
@@ -101,7 +107,11 @@ def _real(name: str, value: Any, what: str = "a number") -> float:
         raise TypeError(f"{name}: expected {what}, got {_short(value)} ({type(value).__name__})")
     if isinstance(value, np.floating) and value.dtype.itemsize < 8:
         return float(str(value))
-    return float(value)
+    try:
+        return float(value)
+    except OverflowError:  # an int beyond the largest double
+        raise ValueError(f"{name}: {_short(value)} is beyond the largest number a double holds "
+                         f"(about 1.8e308)") from None
 
 
 def _integer(name: str, value: Any, what: str = "a whole number") -> int:
@@ -146,6 +156,15 @@ def _strings(name: str, value: Any, what: str) -> List[str]:
     return items
 
 
+def _point(name: str, value: Any) -> List[Any]:
+    """`value` as a point [x, y] (m): two real numbers; TypeError naming `name` otherwise."""
+    if isinstance(value, (str, bytes)) or not isinstance(value, (Sequence, np.ndarray)) \
+            or len(value) != 2:
+        raise TypeError(f"{name}: expected a point [x, y] (m), got {_short(value)} "
+                        f"({type(value).__name__})")
+    return [_real(f"{name}: x" if i == 0 else f"{name}: y", v) for i, v in enumerate(value)]
+
+
 def _message_name(filename: str) -> str:
     """`filename` as UTF-8 text for messages: a name that is not UTF-8 (bytes that os.fsdecode
     kept as surrogate escapes) shows those bytes as \\xNN, as `lash check` prints them raw."""
@@ -185,6 +204,7 @@ class Model:
     def new(cls, name: str, *, gravity: Optional[Sequence[float]] = None) -> "Model":
         """An empty model named `name`, to be built with add_body, add_joint, ... Gravity is off
         unless given, as in a model file (docs/model-format.md §2): gravity=[0, -9.81] (m/s^2)."""
+        _string("name", name, "the model's name (str)")
         data: Dict[str, Any] = {"name": name}
         if gravity is not None:
             if isinstance(gravity, (str, bytes)) or not isinstance(gravity, (Sequence, np.ndarray)):
@@ -229,7 +249,12 @@ class Model:
     def add_ground_marker(self, name: str, position: Sequence[float]) -> "Model":
         """A named point on the ground, world coordinates in m (`ground.markers`)."""
         ground = self._section("ground")
-        ground.setdefault("markers", {})[name] = list(position)
+        markers = ground.setdefault("markers", {})
+        if markers is None:
+            markers = ground["markers"] = {}
+        if name in markers:
+            raise ValueError(f"ground marker '{name}' exists already")
+        markers[name] = _point(f"ground marker '{name}'", position)
         return self
 
     def add_body(self, name: str, *, mass: float, inertia: Optional[float] = None,
@@ -238,8 +263,12 @@ class Model:
         """A rigid body (mass kg, inertia kg*m^2 about the centre of mass, position of the centre
         of mass m, angle rad, markers in body coordinates m); `more` holds any other key of
         docs/model-format.md (e.g. type="point_mass", velocity=[vx, vy])."""
-        spec = {"mass": mass, "inertia": inertia, "position": list(position), "angle": angle,
-                "markers": {k: list(v) for k, v in (markers or {}).items()} or None}
+        if markers is not None and not isinstance(markers, dict):
+            raise TypeError(f"markers: expected a dict of marker name to [x, y] (m, body "
+                            f"coordinates), got {_short(markers)} ({type(markers).__name__})")
+        spec = {"mass": mass, "inertia": inertia, "position": _point("position", position),
+                "angle": angle,
+                "markers": {k: _point(f"marker '{k}'", v) for k, v in (markers or {}).items()} or None}
         spec.update(more)
         return self._add("bodies", name, spec)
 
@@ -254,7 +283,9 @@ class Model:
         bearing; contact and friction keys (journal_radius, normal_law, restitution, friction,
         material, ...) as in docs/model-format.md, or from `clearance_defaults`."""
         return self._add("joints", name, {"type": "revolute", "journal": journal,
-                                          "bearing": bearing, "clearance": clearance, **spec})
+                                          "bearing": bearing,
+                                          "clearance": _real("clearance", clearance, "a number (m)"),
+                                          **spec})
 
     def set_clearance_defaults(self, **spec: Any) -> "Model":
         """Defaults of every clearance joint (`clearance_defaults`: journal_radius, material, ...)."""
@@ -333,6 +364,7 @@ class Model:
 
     @property
     def name(self) -> str:
+        """The model's name (its `name` key, else the file's stem), as summary.json has it."""
         return self.compiled().name
 
     @property
@@ -354,6 +386,13 @@ class Model:
         text = self._text if (self._text is not None and not self.overrides) else compiled.resolved_yaml
         with open(path, "w", encoding="utf-8") as f:
             f.write(text if text.endswith("\n") else text + "\n")
+
+    def __getstate__(self) -> dict:
+        # Pickled (multiprocessing, copy.deepcopy) as text, data and overrides: the compiled
+        # model is loaded again where it is used.
+        state = dict(self.__dict__)
+        state["_compiled"] = state["_compiled_from"] = None
+        return state
 
     def __repr__(self) -> str:
         return f"<lash.Model {self.filename!r}, {len(self.overrides)} overrides>"
@@ -420,7 +459,10 @@ class Result:
 
     def __init__(self, model: Model, compiled, raw: dict, overrides: Sequence[str] = ()) -> None:
         self.model = model
-        self._compiled = compiled
+        # What the summary and the analyses need of the compiled model (a Result pickles).
+        self._model_name: str = compiled.name
+        self._clearance_joint_names: List[str] = list(compiled.clearance_joints)
+        self._resolved_yaml: str = compiled.resolved_yaml
         self._overrides = list(overrides)  # every override of the run, simulate's included
         self.time: np.ndarray = raw["time"]
         self.values: np.ndarray = raw["values"]
@@ -448,6 +490,12 @@ class Result:
         # solver, peaks and each clearance joint's parameters, as `lash run` writes them.
         self._blocks = json.loads(raw["summary_blocks"])
         self._summary: Optional[dict] = None
+
+    def __setstate__(self, state: dict) -> None:
+        # Unpickled arrays come back writable: read-only again, as built.
+        self.__dict__.update(state)
+        for array in (self.time, self.values, *self.events.values()):
+            array.setflags(write=False)
 
     def __getitem__(self, channel: str) -> np.ndarray:
         """One channel's values at `time` (a view, SI units)."""
@@ -504,7 +552,7 @@ class Result:
         t_first = float(self.time[0]) if len(self.time) else 0.0
         t_last = float(self.time[-1]) if len(self.time) else 0.0
         span = t_last - t_first
-        for k, joint in enumerate(self._compiled.clearance_joints):
+        for k, joint in enumerate(self._clearance_joint_names):
             mask = self.events["joint"] == joint
             times, kinds = self.events["time"][mask], self.events["event"][mask]
             vel = self.events["velocity"][mask]
@@ -529,18 +577,20 @@ class Result:
                 "integrator": dict(self.integrator), "solver": self._blocks["solver"],
                 "peaks": self._blocks["peaks"],
                 "max_constraint_violation": self.max_constraint_violation,
-                "model": {"name": self._compiled.name, "file": self.model.filename,
-                          "overrides": list(self._overrides)}}
+                "model": {"name": self._model_name, "file": self.model.filename,
+                          "overrides": list(self._overrides), **self._blocks["model_counts"],
+                          "resolved": self._resolved_yaml}}
 
     def to_pandas(self):
         """The time series as a pandas DataFrame indexed by time (needs pandas, e.g. Debian's
-        python3-pandas); raises ImportError without it."""
+        python3-pandas); raises ImportError without it. The frame holds a copy of the values,
+        so it can be edited (the Result's own arrays are read-only)."""
         try:
             import pandas as pd
         except ImportError as e:
             raise ImportError("Result.to_pandas needs pandas (apt-get install python3-pandas)") from e
-        df = pd.DataFrame(self.values, columns=self.channels, copy=False)
-        df.index = pd.Index(self.time, name="time")
+        df = pd.DataFrame(self.values, columns=self.channels, copy=True)
+        df.index = pd.Index(self.time.copy(), name="time")
         return df
 
     def events_to_pandas(self):
@@ -603,8 +653,11 @@ def _python_diagnostics(error: ModelError, keywords: Dict[str, str],
             file, changed = f"{keywords[path]} ({path})", True
         elif file == "--set" or file.startswith("--set "):
             file, changed = "override" + file[len("--set"):], True
+        # What the message is about: not the keys it lists or suggests ("unknown key 'foo',
+        # expected one of: integrator, rtol, ..., end_time, ...").
+        about = re.split(r", expected one of|, did you mean", message)[0]
         def names(path: str) -> bool:  # a solver message about the key `path` sets
-            return element == "solver" and re.search(rf"\b{path.split('.')[-1]}\b", message)
+            return element == "solver" and re.search(rf"\b{path.split('.')[-1]}\b", about)
         if not message.endswith(set_with) and not file.startswith("override"):
             # A value of the file checked against one an argument set ("output_interval must
             # be <= end_time, got 1e-05 > 1e-09" where t_end set end_time): say which.
@@ -676,8 +729,8 @@ class Study:
     """
 
     def __init__(self, db_path: str | os.PathLike) -> None:
-        data = _lash.read_study(os.fspath(db_path))
-        self.path = os.fspath(db_path)
+        data = _lash.read_study(os.fsdecode(db_path))
+        self.path = os.fsdecode(db_path)
         self.name: str = data["name"]
         self.total_runs: int = data["total_runs"]
         self.parameters: List[str] = list(data["parameters"])
@@ -712,7 +765,7 @@ def sweep(study: str | os.PathLike, output: str | os.PathLike, *, jobs: Optional
     """Runs a study file (docs/studies.md) on `jobs` local threads (0: every core), as
     `lash sweep STUDY -o OUTPUT [--resume]`: every finished run is written to OUTPUT/study.db in
     its own transaction, runs.csv and sections.csv beside it. Returns the Study read back.
-    `jobs=None` is the default, every core.
+    `jobs=0` (the default) or None: every core. Paths may be str, bytes or os.PathLike.
 
     Raises OSError (FileNotFoundError, ...) when the study file cannot be read, ModelError (with
     file:line:column) for a bad study file, ValueError when OUTPUT holds a
@@ -728,23 +781,28 @@ def sweep(study: str | os.PathLike, output: str | os.PathLike, *, jobs: Optional
     if not 0 <= jobs <= 4096:
         raise ValueError(f"jobs={jobs}: expected 0 (every core) or a number of threads up to 4096")
     resume = _flag("resume", resume)
-    if not os.fspath(output):
+    for name, value in (("study", study), ("output", output)):
+        if not isinstance(value, (str, bytes, os.PathLike)):
+            raise TypeError(f"{name}: expected a path (str, bytes or os.PathLike), got "
+                            f"{_short(value)} ({type(value).__name__})")
+    output = os.fsdecode(output)
+    if not output:
         raise ValueError("output: expected a folder name")
-    study = os.fspath(study)
+    study = os.fsdecode(study)
     with open(study, "rb"):  # FileNotFoundError, IsADirectoryError, ... with the path
         pass
     try:
-        _lash.sweep(study, os.fspath(output), int(jobs), resume)
+        _lash.sweep(study, output, int(jobs), resume)
     except ValueError as e:
         if "add --resume" not in str(e):  # the CLI's option, resume=True here
             raise
         raise type(e)(str(e).replace("add --resume", "pass resume=True")) from None
-    return Study(os.path.join(os.fspath(output), "study.db"))
+    return Study(os.path.join(output, "study.db"))
 
 
 def read_study(output: str | os.PathLike) -> Study:
     """The Study in a folder written by `lash sweep` (or its study.db)."""
-    path = os.fspath(output)
+    path = os.fsdecode(output)
     return Study(path if path.endswith(".db") else os.path.join(path, "study.db"))
 
 

@@ -49,7 +49,7 @@ def _model_of(model_or_result):
     if isinstance(model_or_result, Result):
         # The model as the run ran it: its text with every override applied (simulate's t_end,
         # integrator and overrides included), not the caller's Model, which may have changed.
-        return Model(model_or_result._compiled.resolved_yaml,
+        return Model(model_or_result._resolved_yaml,
                      filename=model_or_result.model.filename)
     return _as_model(model_or_result)
 
@@ -192,6 +192,10 @@ def spectra(model, channels: Sequence[str] = (), discard_periods: int = 1) -> Di
 def spectrum(result, channel: str, *, t0: float = 0.0, window: str = "hann") -> Dict[str, Any]:
     """Amplitude spectrum of one channel of a Result from time `t0` (s) on, from its uniformly
     spaced outputs (no new run): amplitude_spectrum(result[channel][time >= t0], dt)."""
+    from . import Result
+    if not isinstance(result, Result):
+        raise TypeError(f"spectrum: expected a lash.Result (lash.simulate's), got "
+                        f"{type(result).__name__}; spectra(model, channels) runs a model")
     t0 = _real("t0", t0, "a time (s)")
     keep = result.time >= t0
     t = result.time[keep]
@@ -236,8 +240,8 @@ def classify_motion(lyapunov: float, period: float, distinct: int, sections: int
     computed), period (s; 0 or NaN: none), distinct Poincare points, sections taken. Returns
     (kind, evidence). Raises ValueError for a negative period."""
     period = _real("period", period, "a period (s)")
-    if period < 0:
-        raise ValueError(f"period: expected a period (s) > 0, or 0 or NaN for none, got {period!r}")
+    if period < 0 or math.isinf(period):
+        raise ValueError(f"period: expected a finite period (s) > 0, or 0 or NaN for none, got {period!r}")
     return _lash.classify_motion(_real("lyapunov", lyapunov, "an exponent (1/s)"),
                                  period,
                                  _c_int("distinct", distinct), _c_int("sections", sections),

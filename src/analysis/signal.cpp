@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 
 namespace lash {
@@ -36,7 +37,14 @@ double ChannelStats::crest() const { return rms() > 0 ? peak() / rms() : 0.0; }
 
 Spectrum amplitude_spectrum(const std::vector<double>& x, double dt, Window window) {
   const size_t n = x.size();
-  if (n < 4 || !(dt > 0)) throw std::invalid_argument("a spectrum needs >= 4 samples and dt > 0");
+  if (n < 4) throw std::invalid_argument("a spectrum needs >= 4 samples");
+  // dt finite and 1/dt too (a subnormal dt: frequencies of inf and nan).
+  if (!(dt > 0) || !std::isfinite(dt) || !std::isfinite(1.0 / dt)) {
+    char got[32];
+    std::snprintf(got, sizeof got, "%g", dt);
+    throw std::invalid_argument(std::string("a spectrum needs a sample interval dt > 0, finite, "
+                                            "with 1/dt finite; got dt = ") + got);
+  }
   double mean = 0;
   for (double v : x) mean += v;
   mean /= n;

@@ -78,8 +78,18 @@ def test_events_and_summary_equal_cli(runs):
             assert mine["clearance_joints"][joint][key] == stats[key], (joint, key)
         assert mine["clearance_joints"][joint]["contact_share"] == pytest.approx(
             stats["contact_share"], abs=1e-12)
-    for key in ("steps", "rejected_steps", "rhs_evaluations", "events"):
+    for key in ("steps", "rejected_steps", "rhs_evaluations", "events", "projections",
+                "missed_events"):
         assert mine["integrator"][key] == summary["integrator"][key], key
+    # Every key of summary.json but the files' ("output") and the start, integrator and model
+    # blocks alike (projections and the model's counts and resolved text were left out).
+    assert set(mine) == set(summary) - {"output", "start"}
+    assert set(mine["integrator"]) == set(summary["integrator"])
+    for key in ("name", "bodies", "joints", "clearance_joints", "resolved"):
+        assert mine["model"][key] == summary["model"][key], key
+    state = json.loads((out / "final_state.json").read_text())
+    assert result.final_state["names"] == state["names"]
+    assert result.final_state["modes"] == {j: bool(m) for j, m in state["modes"].items()}
     # The blocks not computed from the arrays: the solver as run and how the peaks were found.
     assert mine["solver"] == summary["solver"]
     assert mine["peaks"] == summary["peaks"]
@@ -245,7 +255,7 @@ def test_analysis_functions_refuse_inconsistent_arguments():
         A.contact_modes([0.2, 0.1], [True, False], [1.0, 0.0], False, 0, 1, 0.01)
     with pytest.raises(ValueError, match="t0 <= t1"):
         A.contact_modes([], [], [], False, 1, 0, 0.01)
-    with pytest.raises(ValueError, match="continuous_time must be >= 0"):
+    with pytest.raises(ValueError, match="continuous_time must be a finite time >= 0"):
         A.contact_modes([], [], [], False, 0, 1, -0.01)
     modes = A.contact_modes([0.1, 0.2, 0.5, 0.51], [True, False, True, False], [2.0, 0, 3.0, 0],
                             False, 0, 1, 0.05)
@@ -357,6 +367,87 @@ def test_to_pandas(runs):
     df = result.to_pandas()
     assert list(df.columns) == result.channels and df.index.name == "time"
     assert np.array_equal(df["slider.ax"].to_numpy(), result["slider.ax"])
+    # An ordinary frame: edited in place (it raised "assignment destination is read-only"), the
+    # result's own arrays unchanged.
+    df.loc[df.index[0], "slider.ax"] = 1.0
+    df["slider.x"] *= 2
+    assert df["slider.ax"].iloc[0] == 1.0 and result["slider.ax"][0] != 1.0
+
+
+def test_models_and_results_pickle(runs):
+    import pickle
+    _, result = runs
+    model = lash.load(FLORES).set("joints.rod_slider.clearance", CLEARANCE)
+    model.check()  # a compiled model cached: dropped when pickled, loaded again after
+    again = pickle.loads(pickle.dumps(model))
+    assert again.overrides == model.overrides and again.channels == model.channels
+    back = pickle.loads(pickle.dumps(result))
+    assert np.array_equal(back.values, result.values) and back.channels == result.channels
+    assert back.summary == result.summary
+    assert not back.values.flags.writeable and not back["slider.ax"].flags.writeable
+    assert lash.analysis.spectrum(back, "slider.ax")["frequency"].size > 0
+
+
+def test_builders_check_their_arguments():
+    m = lash.Model.new("m")
+    m.add_ground_marker("O", [0, 0])
+    with pytest.raises(ValueError, match="^ground marker 'O' exists already$"):
+        m.add_ground_marker("O", [5, 5])
+    for kwargs, message in [({"position": None}, r"^position: expected a point \[x, y\] \(m\), got None"),
+                            ({"markers": {"A": None}}, r"^marker 'A': expected a point"),
+                            ({"markers": {"A": 0.1}}, r"^marker 'A': expected a point"),
+                            ({"markers": [("A", [0, 0])]}, r"^markers: expected a dict of marker name")]:
+        with pytest.raises(TypeError, match=message):
+            m.add_body("b", mass=1.0, **kwargs)
+    with pytest.raises(TypeError, match=r"^clearance: expected a number \(m\), got None"):
+        m.add_clearance_joint("pin", journal="b.O", bearing="ground.O", clearance=None)
+    with pytest.raises(TypeError, match=r"^name: expected the model's name"):
+        lash.Model.new(None)
+    # NumPy floats narrower than a double are the decimals they print as, everywhere.
+    m.add_body("c", mass=np.float32(0.3), position=np.array([0.1, 0.2], dtype=np.float32))
+    assert "mass: 0.3\n" in m.text() or "mass: 0.3," in m.text() or "mass: 0.3}" in m.text(), m.text()
+    assert "[0.1, 0.2]" in m.text(), m.text()
+    f = lash.load(FLORES).set("joints.rod_slider.clearance", np.float32(2.5e-4))
+    assert f.overrides[-1] == "joints.rod_slider.clearance=0.00025"
+    g = lash.Model.new("g", gravity=np.array([0, -9.81], dtype=np.float32))
+    assert "-9.81]" in g.text()
+
+
+def test_messages_name_only_what_the_message_is_about():
+    # An unknown solver key lists every key; the arguments setting two of them are not its cause.
+    m = lash.load(FLORES).set("solver.foo", 1)
+    with pytest.raises(lash.ModelError) as e:
+        lash.simulate(m, t_end=0.003, output_interval=1e-4)
+    assert str(e.value).rstrip().endswith("(value of the override solver.foo)"), str(e.value)
+    b = lash.Model.new("m").add_body("a", mass=1.0).set_solver(end_time=0.01, foo=1)
+    with pytest.raises(lash.ModelError) as e:
+        lash.simulate(b, t_end=0.003)
+    assert "argument t_end" not in str(e.value), str(e.value)
+    with pytest.raises(ValueError, match=r"^t_end: 10000.* is beyond the largest number"):
+        lash.simulate(FLORES, t_end=10**400)
+    with pytest.raises(TypeError, match=r"^spectrum: expected a lash.Result"):
+        lash.analysis.spectrum(lash.load(FLORES), "slider.ax")
+
+
+def test_analysis_functions_refuse_non_finite_times():
+    x = np.sin(np.arange(64) * 0.3)
+    for dt in (float("inf"), 1e-320):
+        with pytest.raises(ValueError, match="sample interval dt > 0, finite"):
+            lash.analysis.amplitude_spectrum(x, dt)
+    with pytest.raises(ValueError, match="lyapunov must be a finite exponent"):
+        lash.analysis.classify_motion(float("inf"), 0.01, 100, 100)
+    with pytest.raises(ValueError, match="period: expected a finite period"):
+        lash.analysis.classify_motion(0.0, float("inf"), 1, 4)
+    with pytest.raises(ValueError, match="t0 and t1 must be finite"):
+        lash.analysis.contact_modes([0.1, 0.2], [True, False], [1.0, -1.0], False, 0.0,
+                                    float("inf"), 0.01)
+
+
+def test_an_empty_poincare_section_has_a_column_per_variable():
+    # Five periods discarded of a run of one: no section point, and still (0, 2) as (n, 2k) says.
+    m = lash.load(FLORES).set("solver.end_time", 0.012)
+    p = lash.analysis.poincare(m, discard_periods=5)
+    assert p["points"].shape == (0, len(p["variables"])) == (0, 2)
 
 
 def test_every_public_function_has_a_docstring():
@@ -538,7 +629,7 @@ def test_analysis_options_are_checked_and_named_as_python_arguments():
         (lambda: A.count_distinct([1, 2, 3], 0.1), r"^points\[0\]: expected a 1-D sequence"),
         (lambda: A.count_distinct(np.zeros((2, 2, 2)), 0.1), r"^points\[0\]: expected a 1-D sequence of numbers, got an array of shape \(2, 2\)$"),
         (lambda: A.classify_motion(0.0, 0.01, 2**40, 4), r"^distinct: expected a whole number between"),
-        (lambda: A.classify_motion(0.0, -0.01, 1, 4), r"^period: expected a period \(s\) > 0, or 0 or NaN for none, got -0.01$"),
+        (lambda: A.classify_motion(0.0, -0.01, 1, 4), r"^period: expected a finite period \(s\) > 0, or 0 or NaN for none, got -0.01$"),
     ]
     for call, message in value_errors:
         with pytest.raises(ValueError, match=message):
