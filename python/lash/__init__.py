@@ -369,7 +369,9 @@ class Model:
 
     @property
     def channels(self) -> List[str]:
-        """Every output channel `<element>.<quantity>`, in the column order of timeseries.csv."""
+        """Every output channel `<element>.<quantity>`, in the column order of timeseries.csv
+        (a Result holds every channel: solver.output_channels selects only what `lash run`
+        writes)."""
         return [c[0] for c in self.compiled().channels]
 
     def resolved_yaml(self) -> str:
