@@ -5,6 +5,7 @@
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 #include <signal.h>
+#include <time.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -65,15 +66,40 @@ class ProgressObserver : public lash::Observer {
 
 /// The signal that asked the run to stop (0: none). A handler may only store it.
 std::atomic<int> g_interrupt{0};
-extern "C" void on_signal(int sig) { g_interrupt.store(sig); }
+/// When the first signal came (CLOCK_MONOTONIC, ns).
+std::atomic<long long> g_interrupt_ns{0};
+/// The same signal again within this time of the first is the same request delivered twice:
+/// GNU `timeout` sends its signal to the program and then to the program's process group.
+constexpr long long kRepeatedSignalNs = 1'000'000'000;
+
+extern "C" void on_signal(int sig) {
+  // Only async-signal-safe calls here: clock_gettime, sigaction, raise.
+  timespec now{};
+  clock_gettime(CLOCK_MONOTONIC, &now);
+  const long long ns = now.tv_sec * 1'000'000'000LL + now.tv_nsec;
+  const int first = g_interrupt.load();
+  if (first == 0) {
+    g_interrupt_ns.store(ns);
+    g_interrupt.store(sig);
+    return;
+  }
+  if (sig == first && ns - g_interrupt_ns.load() < kRepeatedSignalNs) return;
+  // A second request: end at once, as the signal's default action.
+  struct sigaction dfl {};
+  dfl.sa_handler = SIG_DFL;
+  sigemptyset(&dfl.sa_mask);
+  sigaction(sig, &dfl, nullptr);
+  raise(sig);
+}
 
 /// SIGINT, SIGTERM and SIGHUP end the run within one integrator step; it then writes its summary
-/// and final state like any stopped run; a second signal ends the program at once. A signal the
-/// parent ignores stays ignored (`nohup lash run ...` survives a closed terminal).
+/// and final state like any stopped run; a second signal ends the program at once (the same
+/// signal within kRepeatedSignalNs of the first is taken for the first delivered twice). A signal
+/// the parent ignores stays ignored (`nohup lash run ...` survives a closed terminal).
 void install_signal_handlers() {
   struct sigaction sa {};
   sa.sa_handler = on_signal;
-  sa.sa_flags = SA_RESETHAND;
+  sa.sa_flags = 0;
   sigemptyset(&sa.sa_mask);
   for (int sig : {SIGINT, SIGTERM, SIGHUP}) {
     struct sigaction old {};

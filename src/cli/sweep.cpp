@@ -32,16 +32,23 @@ namespace {
 constexpr int kExitOk = 0, kExitBadInput = 2, kExitIo = 3, kExitInterrupted = 130;
 
 std::string duration_text(double s) {
+  // Rounded to the unit shown last before it is split (3 h 59.6 min is 4 h 0 min, not 3 h 60 min).
   if (s < 90) return fmt::format("{:.0f} s", s);
-  if (s < 5400) return fmt::format("{:.0f} min {:.0f} s", std::floor(s / 60), std::fmod(s, 60));
-  return fmt::format("{:.0f} h {:.0f} min", std::floor(s / 3600), std::fmod(s, 3600) / 60);
+  if (s < 5400) {
+    const long seconds = std::lround(s);
+    return fmt::format("{} min {} s", seconds / 60, seconds % 60);
+  }
+  const long minutes = std::lround(s / 60);
+  return fmt::format("{} h {} min", minutes / 60, minutes % 60);
 }
 
 /// The progress line: done / failed / remaining and an estimated finish.
 class Progress {
  public:
-  Progress(int total, int already, bool show)
-      : total_(total), done_(already), show_(show), tty_(isatty(STDERR_FILENO)) {}
+  /// `already` runs recorded before this session, `already_failed` of them not completed.
+  Progress(int total, int already, int already_failed, bool show)
+      : total_(total), done_(already), failed_(already_failed), show_(show),
+        tty_(isatty(STDERR_FILENO)) {}
   void add(const RunRecord& r) {
     ++done_;
     ++this_session_;
@@ -57,7 +64,7 @@ class Progress {
         now - last_ < std::chrono::seconds(30))
       return;
     last_ = now;
-    next_mark_ = done_ + std::max(1, total_ / 10);
+    next_mark_ = done_ + std::max(1, (total_ + 9) / 10);
     const int left = total_ - done_;
     std::string eta = "";
     if (this_session_ > 0 && left > 0)
@@ -67,7 +74,7 @@ class Progress {
   }
 
  private:
-  int total_, done_, failed_ = 0, this_session_ = 0, next_mark_ = 0;
+  int total_, done_, failed_, this_session_ = 0, next_mark_ = 0;
   bool show_, tty_;
   std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now(), last_{};
 };
@@ -268,7 +275,9 @@ int mpi_worker(std::atomic<int>& interrupt) {
     MPI_Recv(&index, 1, MPI_INT, 0, kTagWork, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
     if (index < 0) break;
     const RunRecord rec = run_study_point(spec, runs.at(index), &interrupt);
-    send_text(to_json(rec).dump(), 0, kTagResult);
+    nlohmann::json message = to_json(rec);
+    message["signal"] = interrupt.load();  // this rank's own stop request, for rank 0
+    send_text(message.dump(), 0, kTagResult);
   }
   return kExitOk;
 }
@@ -336,7 +345,13 @@ int SweepCommand::run(std::atomic<int>& interrupt, const std::function<void()>& 
   int code = -1;
   try {
     spec = load_study_file(study_);
-    folder = std::make_unique<StudyFolder>(out, spec, resume_);
+    if (size > 1 && !spec.continuation.empty()) {  // refused before the folder is made
+      std::cerr << "error: " << study_ << ": continuation runs each chain one run after another on "
+                   "one machine; run it without mpirun\n";
+      code = kExitBadInput;
+    } else {
+      folder = std::make_unique<StudyFolder>(out, spec, resume_);
+    }
   } catch (const ModelError& e) {
     code = study_error(e);
   } catch (const IoError& e) {
@@ -344,11 +359,6 @@ int SweepCommand::run(std::atomic<int>& interrupt, const std::function<void()>& 
     code = kExitIo;
   } catch (const std::exception& e) {  // the folder, or a structure the reader did not foresee
     std::cerr << "error: " << e.what() << "\n";
-    code = kExitBadInput;
-  }
-  if (code < 0 && size > 1 && !spec.continuation.empty()) {
-    std::cerr << "error: " << study_ << ": continuation runs each chain one run after another on "
-                 "one machine; run it without mpirun\n";
     code = kExitBadInput;
   }
   if (code < 0) {
@@ -362,11 +372,12 @@ int SweepCommand::run(std::atomic<int>& interrupt, const std::function<void()>& 
   if (code >= 0) return code;
 
   const int total = static_cast<int>(folder->runs().size());
-  Progress progress(total, folder->already(), !quiet_);
+  Progress progress(total, folder->already(), folder->db().failed(), !quiet_);
   if (!quiet_ && folder->already() > 0)
     fmt::print(stderr, "sweep: {} of {} runs already in {}/study.db; running the other {}\n",
                folder->already(), total, out, folder->todo().size());
   std::string write_error;
+  int worker_signal = 0;  // a signal an MPI worker rank received (it stops the sweep)
   try {
 #ifdef LASH_MPI
     if (size > 1) {
@@ -390,7 +401,12 @@ int SweepCommand::run(std::atomic<int>& interrupt, const std::function<void()>& 
         std::string msg(n, '\0');
         MPI_Recv(msg.data(), n, MPI_CHAR, st.MPI_SOURCE, kTagResult, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
         if (!msg.empty() && write_error.empty()) {
-          const RunRecord rec = record_from_json(nlohmann::json::parse(msg));
+          const nlohmann::json message = nlohmann::json::parse(msg);
+          const RunRecord rec = record_from_json(message);
+          // A rank stopped by a signal of its own stops the sweep as one to this rank would:
+          // the runs it would be handed all came back interrupted, and unrecorded.
+          if (const int signal = message.value("signal", 0); signal != 0 && worker_signal == 0)
+            worker_signal = signal;
           if (rec.status != "interrupted") {  // rerun by --resume
             try {
               folder->db().add(folder->runs().at(rec.index), rec, "rank " + std::to_string(st.MPI_SOURCE));
@@ -401,7 +417,8 @@ int SweepCommand::run(std::atomic<int>& interrupt, const std::function<void()>& 
           }
         }
         int index = -1;
-        if (next < folder->todo().size() && interrupt.load() == 0 && write_error.empty())
+        if (next < folder->todo().size() && interrupt.load() == 0 && worker_signal == 0 &&
+            write_error.empty())
           index = folder->todo()[next++].index;
         MPI_Send(&index, 1, MPI_INT, st.MPI_SOURCE, kTagWork, MPI_COMM_WORLD);
         if (index < 0) --active;
@@ -421,7 +438,8 @@ int SweepCommand::run(std::atomic<int>& interrupt, const std::function<void()>& 
     write_error = e.what();
   }
   progress.print(true);
-  return finish(*folder, total, progress, interrupt.load(), write_error, quiet_);
+  return finish(*folder, total, progress, interrupt.load() != 0 ? interrupt.load() : worker_signal,
+                write_error, quiet_);
 }
 
 }  // namespace lash::cli

@@ -39,3 +39,47 @@ assert b_workers <= {"rank 1", "rank 2"} and len(b_workers) == 2, b_workers
 print("local and MPI (3 processes) results identical: %d runs, %d metrics, %d section values"
       % (len(a_runs), len(a_rest[0]), len(a_rest[1])))
 PY
+
+# A continuation study is refused under mpirun before its folder is made: the plain `lash sweep`
+# the message recommends then runs (a study.db left behind refused it, "add --resume").
+cat > "$dir/cont.yaml" <<YAML
+study: cont
+model: $src/examples/flores_slider_crank.yaml
+set: {solver.end_time: 0.012, solver.output_interval: 1.0e-4}
+parameters:
+  drivers.crank.speed_rpm: {values: [4000, 5000]}
+continuation: up
+transient: {periods: 1}
+YAML
+if mpirun --oversubscribe -n 2 "$lash" sweep "$dir/cont.yaml" -q -o "$dir/cont" 2>"$dir/cont.err"; then
+  echo "a continuation study ran under mpirun"; exit 1
+fi
+grep -q "run it without mpirun" "$dir/cont.err" || { cat "$dir/cont.err"; exit 1; }
+[ ! -e "$dir/cont" ] || { echo "the refused study left $(ls -A "$dir/cont")"; exit 1; }
+"$lash" sweep "$dir/cont.yaml" -q -o "$dir/cont"
+
+# A signal to one worker rank stops the sweep as one to rank 0 would: exit 130 and `--resume`,
+# not exit 0 with the runs it was then handed lost (they came back interrupted, unrecorded).
+sed -e 's/solver.end_time: 0.05/solver.end_time: 0.4/' -e 's/count: 7/count: 12/' \
+  "$dir/study.yaml" > "$dir/long.yaml"
+set +e
+mpirun --oversubscribe -n 3 "$lash" sweep "$dir/long.yaml" -q -o "$dir/long" 2>"$dir/long.err" &
+launcher=$!
+worker=""
+for _ in $(seq 100); do  # rank 2's process, once it has started
+  for p in $(pgrep -f "sweep $dir/long.yaml"); do
+    grep -qz '^OMPI_COMM_WORLD_RANK=2$' "/proc/$p/environ" 2>/dev/null && worker=$p
+  done
+  [ -n "$worker" ] && break
+  sleep 0.1
+done
+sleep 1
+kill -TERM "$worker"
+wait "$launcher"; rc=$?
+set -e
+recorded=$(/usr/bin/python3 -c "import sqlite3,sys; print(sqlite3.connect(sys.argv[1]).execute('select count(*) from runs').fetchone()[0])" "$dir/long/study.db")
+if [ "$recorded" -lt 12 ]; then
+  [ "$rc" -ne 0 ] || { echo "runs missing ($recorded of 12) and exit 0"; cat "$dir/long.err"; exit 1; }
+  grep -q "resume" "$dir/long.err" || { cat "$dir/long.err"; exit 1; }
+fi
+echo "continuation refused with no folder; a worker's signal stopped the sweep (exit $rc, $recorded of 12 recorded)"
