@@ -721,7 +721,8 @@ PYBIND11_MODULE(_lash, m) {
         },
         py::arg("points"), py::arg("tol"));
   m.def("classify_motion",
-        [](double lyapunov, double period, int distinct, int sections, int peaks, double min_end) {
+        [](double lyapunov, double period, int distinct, int sections, int peaks, double min_end,
+           int recurring) {
           if (distinct < 0 || sections < 0 || distinct > sections)
             throw std::invalid_argument(
                 "classify_motion: expected 0 <= distinct <= sections (distinct points among the "
@@ -733,11 +734,16 @@ PYBIND11_MODULE(_lash, m) {
           if (!std::isfinite(min_end))
             throw std::invalid_argument("classify_motion: min_end_time must be a finite time (s), got " +
                                         number(min_end));
-          const lash::Verdict v = lash::classify_motion(lyapunov, period, distinct, sections, peaks, min_end);
+          if (recurring > distinct)
+            throw std::invalid_argument("classify_motion: expected recurring <= distinct (or -1), got " +
+                                        std::to_string(recurring) + " > " + std::to_string(distinct));
+          const lash::Verdict v = lash::classify_motion(lyapunov, period, distinct, sections, peaks,
+                                                        min_end, std::nan(""), recurring);
           return py::make_tuple(v.kind, v.evidence);
         },
         py::arg("lyapunov"), py::arg("period"), py::arg("distinct"), py::arg("sections"),
-        py::arg("non_harmonic_peaks") = -1, py::arg("min_end_time") = 0.0);
+        py::arg("non_harmonic_peaks") = -1, py::arg("min_end_time") = 0.0,
+        py::arg("recurring") = -1);
   m.def("verdict_rule", [] { return std::string(lash::verdict_rule()); });
   m.def("contact_modes",
         [](const std::vector<double>& times, const std::vector<bool>& onset,

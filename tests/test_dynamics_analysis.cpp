@@ -154,4 +154,26 @@ TEST(Verdict, WeighsTheEvidence) {
             "the spectrum agrees; the exponent decides");
   // Recurring points still decide first.
   EXPECT_EQ(classify_motion(nan, 0.012, 2, 20, 0, 0.0, 0.9).kind, "periodic");
+  // Few distinct points of which some occur once (a transient decaying onto its orbit, 7 points
+  // met once and the orbit's): not period-8. A clearly negative exponent says the motion
+  // converges; one about 0, quasi-periodic; without one, undetermined.
+  const Verdict settling = classify_motion(-2.5, 0.2, 8, 24, 0, 0.0, nan, 1);
+  EXPECT_EQ(settling.kind, "periodic");
+  EXPECT_NE(settling.evidence[3].find("7 of the 8 distinct points occur once"), std::string::npos)
+      << settling.evidence[3];
+  EXPECT_NE(settling.evidence.back().find("converging"), std::string::npos);
+  EXPECT_EQ(classify_motion(-0.3, 0.2, 8, 24, 0, 0.0, nan, 1).kind, "quasi-periodic");  // λT −0.06
+  EXPECT_EQ(classify_motion(nan, 0.2, 8, 24, 0, 0.0, nan, 1).kind, "undetermined");
+  EXPECT_EQ(classify_motion(nan, 0.2, 8, 24, 0, 0.0, nan, 8).kind, "periodic");
+  // A damped oscillator decaying to rest: λ = −1 1/s, T = 0.314 s, nothing recurs.
+  EXPECT_EQ(classify_motion(-1.0, 0.314, 28, 38, 0).kind, "periodic");
+}
+
+TEST(Verdict, CountsTheDistinctPointsThatRecur) {
+  // Three points of a transient, then a period-2 orbit: 5 distinct, 2 of them recurring.
+  const std::vector<std::vector<double>> p = {{3, 0}, {2, 0}, {1.5, 0}, {1, 0}, {-1, 0},
+                                              {1, 1e-9}, {-1, 0}, {1, 0}, {-1, 0}};
+  EXPECT_EQ(count_distinct(p, 1e-6), 5);
+  EXPECT_EQ(count_recurring(p, 1e-6), 2);
+  EXPECT_EQ(count_recurring({}, 1e-6), 0);
 }

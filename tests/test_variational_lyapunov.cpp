@@ -52,6 +52,45 @@ solver: {rtol: 1e-9, atol: 1e-12, end_time: 6.0, output_interval: 0.01, initial_
   EXPECT_EQ(e.renormalisations, intervals);
 }
 
+TEST(VariationalLyapunov, AMotionComeToRestKeepsItsExponents) {
+  // The same oscillator with ζ = 0.05 (−ζω = −1 1/s) over 40 s at the default tolerances, and
+  // overdamped (c = 100 N·s/m, ζ = 1.25: −ζω ± ω√(ζ² − 1) = −10 and −40 1/s) over 6 s. Once
+  // the motion has decayed DOPRI5's steps span many periods, and one tangent RK4 step per step
+  // gave −4.93, −4.93 and −0.18, −8.77; the steps are now cut (kTangentSubstep).
+  const std::string yaml = R"Y(
+bodies:
+  block: {mass: 2.0, position: [0.31, 0]}
+ground:
+  markers: {A: [0, 0]}
+joints:
+  guide: {type: translational, guide: ground.A, slider: block, axis: [1, 0]}
+loads:
+  spring: {type: spring_damper, from: ground.A, to: block, stiffness: 800, damping: 4, free_length: 0.3}
+solver: {end_time: 40, output_interval: 0.001}
+)Y";
+  const double period = 2 * M_PI / 20.0;
+  struct Case {
+    std::vector<std::string> set;
+    double end, first, second, tolerance;
+  };
+  for (const Case& c : {Case{{}, 40.0, -1.0, -1.0, 0.02},
+                        Case{{"loads.spring.damping=100"}, 6.0, -10.0, -40.0, 0.2}}) {
+    std::vector<std::string> set = c.set;
+    set.push_back("solver.end_time=" + std::to_string(c.end));
+    const Model model = load_model_text(yaml, "oscillator.yaml", set).model;
+    Workspace ws(model);
+    const Eigen::VectorXd y0 = initial_state(model, ws);
+    const double interval = period / 20;
+    const int intervals = static_cast<int>((c.end - period) / interval);
+    const LyapunovEstimate e =
+        variational_lyapunov(model, y0, 0.0, interval, intervals, 1.0 / 20.0, nullptr);
+    ASSERT_TRUE(e.ok) << e.message;
+    ASSERT_EQ(e.spectrum.size(), 2u);
+    EXPECT_NEAR(e.spectrum[0], c.first, c.tolerance) << c.end;
+    EXPECT_NEAR(e.spectrum[1], c.second, c.tolerance * std::abs(c.second / c.first)) << c.end;
+  }
+}
+
 TEST(VariationalLyapunov, ChaoticPendulumAgreesWithTwoTrajectoriesAndSumRule) {
   // The damped, driven pendulum θ'' + θ'/Q + sin θ = g cos(ω_D t) with Q = 2, g = 1.5,
   // ω_D = 2/3 (chaotic; Baker & Gollub, Chaotic Dynamics: An Introduction) from model elements:

@@ -235,10 +235,12 @@ def count_distinct(points, tol: float) -> int:
 
 
 def classify_motion(lyapunov: float, period: float, distinct: int, sections: int,
-                    non_harmonic_peaks: int = -1, min_end_time: float = 0.0) -> Tuple[str, list]:
+                    non_harmonic_peaks: int = -1, min_end_time: float = 0.0,
+                    recurring: int = -1) -> Tuple[str, list]:
     """The verdict rule (verdict_rule()) on its inputs: largest Lyapunov exponent (1/s, NaN if not
-    computed), period (s; 0 or NaN: none), distinct Poincare points, sections taken. Returns
-    (kind, evidence). Raises ValueError for a negative period."""
+    computed), period (s; 0 or NaN: none), distinct Poincare points, sections taken, and how many
+    of the distinct points recur (-1: all). Returns (kind, evidence). Raises ValueError for a
+    negative period."""
     period = _real("period", period, "a period (s)")
     if period < 0 or math.isinf(period):
         raise ValueError(f"period: expected a finite period (s) > 0, or 0 or NaN for none, got {period!r}")
@@ -246,7 +248,8 @@ def classify_motion(lyapunov: float, period: float, distinct: int, sections: int
                                  period,
                                  _c_int("distinct", distinct), _c_int("sections", sections),
                                  _c_int("non_harmonic_peaks", non_harmonic_peaks),
-                                 _real("min_end_time", min_end_time, "a time (s)"))
+                                 _real("min_end_time", min_end_time, "a time (s)"),
+                                 _c_int("recurring", recurring))
 
 
 def verdict_rule() -> str:

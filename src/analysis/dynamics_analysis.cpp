@@ -6,21 +6,41 @@
 
 namespace lash {
 
-int count_distinct(const std::vector<std::vector<double>>& points, double tol) {
+namespace {
+
+/// Greedy clustering within `tol`: each point joins the first centre within tol, or becomes
+/// one. Returns the number of points of each centre, in the order the centres were found.
+std::vector<int> cluster_sizes(const std::vector<std::vector<double>>& points, double tol) {
   std::vector<const std::vector<double>*> centres;
+  std::vector<int> sizes;
   for (const auto& p : points) {
-    bool found = false;
-    for (const auto* c : centres) {
+    size_t found = centres.size();
+    for (size_t k = 0; k < centres.size() && found == centres.size(); ++k) {
+      const auto& c = *centres[k];
       double d2 = 0;
-      for (size_t i = 0; i < p.size(); ++i) d2 += (p[i] - (*c)[i]) * (p[i] - (*c)[i]);
-      if (d2 <= tol * tol) {
-        found = true;
-        break;
-      }
+      for (size_t i = 0; i < p.size(); ++i) d2 += (p[i] - c[i]) * (p[i] - c[i]);
+      if (d2 <= tol * tol) found = k;
     }
-    if (!found) centres.push_back(&p);
+    if (found == centres.size()) {
+      centres.push_back(&p);
+      sizes.push_back(1);
+    } else {
+      ++sizes[found];
+    }
   }
-  return static_cast<int>(centres.size());
+  return sizes;
+}
+
+}  // namespace
+
+int count_distinct(const std::vector<std::vector<double>>& points, double tol) {
+  return static_cast<int>(cluster_sizes(points, tol).size());
+}
+
+int count_recurring(const std::vector<std::vector<double>>& points, double tol) {
+  int recurring = 0;
+  for (int n : cluster_sizes(points, tol)) recurring += n >= 2;
+  return recurring;
 }
 
 LyapunovResult largest_lyapunov(
@@ -99,15 +119,18 @@ ModeSummary contact_modes(const std::vector<double>& times, const std::vector<bo
 
 const char* verdict_rule() {
   return "after the transient, with at least 16 Poincaré sections (fewer: undetermined, not "
-         "enough periods): periodic (period-k) if the sections hold k <= 8 distinct points and "
-         "each recurs (k <= sections/2); otherwise chaotic if the largest Lyapunov exponent gives "
-         "lambda*T > 0.1 per period T, quasi-periodic if lambda*T <= 0.1; without an exponent, "
+         "enough periods): periodic (period-k) if the sections hold k <= 8 distinct points, "
+         "k <= sections/2, and each of them recurs; otherwise chaotic if the largest Lyapunov "
+         "exponent gives lambda*T > 0.1 per period T, periodic (converging) if lambda*T < -0.1, "
+         "quasi-periodic if |lambda*T| <= 0.1; without an exponent, "
          "chaotic if the spectrum's broadband share exceeds 0.5 (continuous), quasi-periodic if it "
          "is below 0.1 (discrete), else undetermined";
 }
 
 Verdict classify_motion(double lyapunov, double period, int distinct, int sections,
-                        int non_harmonic_peaks, double min_end_time, double broadband) {
+                        int non_harmonic_peaks, double min_end_time, double broadband,
+                        int recurring) {
+  if (recurring < 0) recurring = distinct;
   Verdict v;
   std::ostringstream s;
   const bool have_lyap = std::isfinite(lyapunov);
@@ -146,11 +169,27 @@ Verdict classify_motion(double lyapunov, double period, int distinct, int sectio
     v.evidence.push_back(s.str());
     return v;
   }
-  if (distinct <= kVerdictMaxPeriod && 2 * distinct <= sections) {
+  const bool few = distinct <= kVerdictMaxPeriod && 2 * distinct <= sections;
+  if (few && recurring == distinct) {
     v.kind = "periodic";
     v.evidence.push_back("period-" + std::to_string(distinct) + " orbit: every point recurs");
-  } else if (std::isfinite(growth)) {
-    v.kind = growth > kVerdictChaosThreshold ? "chaotic" : "quasi-periodic";
+    return v;
+  }
+  if (few)
+    v.evidence.push_back(std::to_string(distinct - recurring) + " of the " + std::to_string(distinct) +
+                         " distinct points occur once: the motion has not settled onto an orbit "
+                         "(a longer transient, --discard, shows whether it does)");
+  if (std::isfinite(growth)) {
+    v.kind = growth > kVerdictChaosThreshold    ? "chaotic"
+             : growth < -kVerdictChaosThreshold ? "periodic"
+                                                : "quasi-periodic";
+    if (v.kind == "periodic") {
+      s << "converging: lambda*T < -" << kVerdictChaosThreshold
+        << ", nearby trajectories close in on an attracting orbit (or rest) whose points have "
+           "not all recurred yet";
+      v.evidence.push_back(s.str());
+      s.str("");
+    }
     if (have_spectrum && std::string(spectrum_kind) != "mixed") {
       const bool agrees = (v.kind == "chaotic") == (std::string(spectrum_kind) == "continuous");
       v.evidence.push_back(std::string("the spectrum ") + (agrees ? "agrees" : "disagrees") +

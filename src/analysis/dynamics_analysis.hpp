@@ -13,6 +13,10 @@ namespace lash {
 /// Number of distinct points: greedy clustering, a point joins a cluster whose first member is
 /// within `tol` (Euclidean). A period-k orbit sampled stroboscopically gives k.
 int count_distinct(const std::vector<std::vector<double>>& points, double tol);
+/// Of the distinct points count_distinct finds (the same greedy centres), how many recur: have
+/// at least one more point within `tol`. A settled period-k orbit's k points all do; a
+/// transient's points, each met once, do not.
+int count_recurring(const std::vector<std::vector<double>>& points, double tol);
 
 /// Largest Lyapunov exponent by two nearby trajectories with renormalisation (Benettin et al.,
 /// Meccanica 1980): every `interval`, the separation d is measured with `norm`, ln(d/d0) is
@@ -89,9 +93,11 @@ const char* verdict_rule();
 /// between quasi-periodic and chaotic when there is no exponent and is weighed against it when
 /// there is; `non_harmonic_peaks` (strong spectral peaks off the driving harmonics, −1: none
 /// computed) is listed as evidence only. `min_end_time` (s, 0: unknown) is the end_time that
-/// would give enough sections, quoted when there are too few.
+/// would give enough sections, quoted when there are too few. `recurring` (count_recurring; −1:
+/// not computed, taken as `distinct`) is how many of the distinct points recur: a period-k
+/// verdict needs all k.
 Verdict classify_motion(double lyapunov, double period, int distinct, int sections,
                         int non_harmonic_peaks, double min_end_time = 0.0,
-                        double broadband = std::nan(""));
+                        double broadband = std::nan(""), int recurring = -1);
 
 }  // namespace lash

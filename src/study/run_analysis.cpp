@@ -1014,6 +1014,7 @@ RunAnalysis analyze_samples(const Model& model, const AnalysisOptions& o, Plan& 
     tol = c == 0 ? own : std::min(tol, own);
   }
   const int distinct = count_distinct(sa.sections, tol);
+  const int recurring = count_recurring(sa.sections, tol);
   const int n_sections = static_cast<int>(sa.sections.size());
   // The period the exponent is weighed against, and the run that would give enough sections:
   // stroboscopic sections fall at k·T for k >= the discarded periods; event-based ones at the
@@ -1126,7 +1127,7 @@ RunAnalysis analyze_samples(const Model& model, const AnalysisOptions& o, Plan& 
 
   const Verdict v =
       classify_motion(lyap, verdict_period, distinct, n_sections, off_harmonic, min_end_time,
-                      broadband);
+                      broadband, recurring);
   out.verdict.kind = v.kind;
   out.verdict.evidence = v.evidence;
   out.verdict.rule = verdict_rule();

@@ -13,6 +13,10 @@ namespace lash {
 
 namespace {
 
+/// Largest h·ρ of one tangent RK4 step (ρ = ‖JV‖/‖V‖): RK4's local error is about (h·ρ)⁵/120,
+/// 8e-6 at 0.25.
+constexpr double kTangentSubstep = 0.25;
+
 /// Tangent vectors carried along the accepted steps of one run (Observer::step): each step
 /// [t0, t1] advances them by one RK4 step of V' = J(t) V, J·V by forward differences of the
 /// right-hand side at the step's dense output; each contact event maps them with its saltation
@@ -55,36 +59,68 @@ class TangentRider final : public Observer {
             StepProbe& probe) override {
     if (failed()) return;
     ws_.contact = ws.contact;  // the step's modes
-    // The reference state at the RK4 nodes: t0 (the previous step's end, or after an event
-    // its mapped state), the midpoint from the dense output, t1 (given).
-    const double tm = 0.5 * (t0 + t1);
+    // The reference state at t0: the previous step's end, or after an event its mapped state.
     Eigen::VectorXd y0 = y_prev_;
     if (t_prev_ != t0) {
       if (!probe.at(t0)) return fail(t0, "the dense output cannot be evaluated");
       y0 = probe.state();
     }
-    if (!probe.at(tm)) return fail(tm, "the dense output cannot be evaluated");
-    const Eigen::VectorXd ym = probe.state();
-    // f at each node once (the midpoint serves two stages; t0 is the last step's t1).
-    const bool reuse = have_f_prev_ && t_prev_ == t0;
-    bool have_fm = false, have_f1 = false;
-    Eigen::VectorXd fm(nt_), f1(nt_);
-    TangentMap jv = [&](double t, const Eigen::MatrixXd& V, Eigen::MatrixXd& JV) {
-      const int node = t == t0 ? 0 : (t == t1 ? 2 : 1);
-      y_ref_ = node == 0 ? y0 : (node == 2 ? y : ym);
-      const Eigen::VectorXd yt = y_ref_.head(nt_);
-      if (node == 0 && !reuse && !f_(t, yt, f_prev_)) return false;
-      if (node == 1 && !have_fm && !(have_fm = f_(t, yt, fm))) return false;
-      if (node == 2 && !have_f1 && !(have_f1 = f_(t, yt, f1))) return false;
-      const Eigen::VectorXd& f0 = node == 0 ? f_prev_ : (node == 1 ? fm : f1);
-      return forward_difference_jv(f_, t, yt, f0, V, weights_, step_, JV);
+    // RK4 is accurate while h·ρ is small (ρ: how fast J turns the tangent vectors, ‖JV‖/‖V‖ at
+    // the last step's start). The integrator's steps are not bounded by that: a damped motion
+    // that has settled takes steps of many periods, where one RK4 step over h·ρ = 6 gave a
+    // damped oscillator's exponents as −4.9 where they are −1. Such a step is cut into
+    // ⌈h·ρ / kTangentSubstep⌉ RK4 steps on the dense output.
+    const int substeps = static_cast<int>(
+        std::clamp(std::ceil((t1 - t0) * rho_ / kTangentSubstep), 1.0, 10000.0));
+    // f at each node once: a substep's start is the last one's end, its middle serves two stages.
+    struct Node {
+      double t = 0.0;
+      Eigen::VectorXd y, f;
+      bool have_f = false;
     };
-    if (!tangent_rk4_step(jv, t0, t1, spectrum_->vectors()))
-      return fail(t1, "the right-hand side cannot be evaluated beside the trajectory");
+    Node a, m, b;
+    a.t = t0;
+    a.y = y0;
+    if (have_f_prev_ && t_prev_ == t0) a.f = f_prev_, a.have_f = true;
+    for (int i = 0; i < substeps; ++i) {
+      m = Node{}, b = Node{};
+      b.t = i + 1 == substeps ? t1 : t0 + (t1 - t0) * (i + 1) / substeps;
+      m.t = 0.5 * (a.t + b.t);
+      for (Node* n : {&m, &b}) {
+        if (n->t == t1) {
+          n->y = y;
+        } else {
+          if (!probe.at(n->t)) return fail(n->t, "the dense output cannot be evaluated");
+          n->y = probe.state();
+        }
+      }
+      bool first = true;
+      TangentMap jv = [&](double t, const Eigen::MatrixXd& V, Eigen::MatrixXd& JV) {
+        Node& n = t == a.t ? a : (t == b.t ? b : m);
+        y_ref_ = n.y;
+        const Eigen::VectorXd yt = n.y.head(nt_);
+        if (!n.have_f && !(n.have_f = f_(t, yt, n.f))) return false;
+        if (!forward_difference_jv(f_, t, yt, n.f, V, weights_, step_, JV)) return false;
+        if (first && i == 0) {  // ρ for the next step
+          double r = 0.0;
+          for (int c = 0; c < V.cols(); ++c) {
+            const double len = V.col(c).cwiseProduct(weights_).norm();
+            if (len > 0.0) r = std::max(r, JV.col(c).cwiseProduct(weights_).norm() / len);
+          }
+          rho_ = r;
+        }
+        first = false;
+        return true;
+      };
+      if (!tangent_rk4_step(jv, a.t, b.t, spectrum_->vectors()))
+        return fail(b.t, "the right-hand side cannot be evaluated beside the trajectory");
+      a = std::move(b);
+    }
+    substeps_ += substeps - 1;
     y_prev_ = y;
     t_prev_ = t1;
-    f_prev_ = f1;
-    have_f_prev_ = have_f1;
+    f_prev_ = a.f;
+    have_f_prev_ = a.have_f;
     if (t1 >= next_) {
       project(t1, y, spectrum_->vectors());
       if (!spectrum_->vectors().allFinite())
@@ -237,6 +273,8 @@ class TangentRider final : public Observer {
   Eigen::VectorXd weights_, y_prev_, y_ref_, pad_, ydot_;
   double t_prev_;
   Eigen::VectorXd f_prev_;     ///< f at (t_prev_, y_prev_) when have_f_prev_
+  double rho_ = 0.0;           ///< ‖JV‖/‖V‖ (weighted, largest column) at the last step's start
+  long substeps_ = 0;          ///< RK4 steps added by cutting integrator steps (kTangentSubstep)
   bool have_f_prev_ = false;
   FlowRhs f_;
   std::unique_ptr<TangentSpectrum> spectrum_;
