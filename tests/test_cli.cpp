@@ -565,6 +565,31 @@ TEST(Cli, AFailureWithoutClearanceJointsStillGivesTheState) {
   fs::remove_all(dir);
 }
 
+TEST(Cli, ARunStalledByPlainCoulombFrictionSaysSo) {
+  // A journal thrown head-on at its bearing (radial motion: the slip is round-off) with plain
+  // Coulomb friction stalls at the first contact, where the frictionless run and the smooth laws
+  // pass; the failure names the slip and the laws that smooth the switch.
+  const fs::path dir = temp_dir("coulomb_stall");
+  fs::create_directories(dir);
+  std::ofstream(dir / "m.yaml")
+      << "ground: {markers: {O: [0, 0]}}\nbodies:\n  pin: {mass: 1.0, inertia: 1.0e-4, "
+         "position: [0, 0], velocity: [1, 0.7], markers: {J: [0, 0]}}\njoints:\n  cj: {type: "
+         "revolute, journal: pin.J, bearing: ground.O, clearance: 0.5e-3, journal_radius: 9.5e-3, "
+         "material: {youngs_modulus: 207e9, poisson_ratio: 0.3}, normal_law: "
+         "lankarani_nikravesh, restitution: 0.9, friction: {law: coulomb, mu: 0.1}}\n"
+         "solver: {end_time: 0.005, output_interval: 1e-6, rtol: 1e-10, atol: 1e-14, "
+         "initial_state: given, max_steps: 200000}\n";
+  const Result r = run_lash("run " + (dir / "m.yaml").string() + " -q -o " + (dir / "out").string());
+  EXPECT_EQ(r.code, 1) << r.out;
+  EXPECT_NE(r.out.find("(plain Coulomb friction is discontinuous at zero slip"), std::string::npos)
+      << r.out;
+  const Result smooth = run_lash("run " + (dir / "m.yaml").string() + " -q -o " +
+                                 (dir / "smooth").string() +
+                                 " --set 'joints.cj.friction={law: ambrosio, mu: 0.1, v0: 1e-4, v1: 1e-3}'");
+  EXPECT_EQ(smooth.code, 0) << smooth.out;
+  fs::remove_all(dir);
+}
+
 TEST(Cli, BdfFailsWhereTheRightHandSideBlowsUpInsteadOfCreeping) {
   // A load that diverges at 1 ms, and a contact stiffness of 1e300: DOPRI5 stops at once with
   // a step-size underflow; BDF crept on for its whole max_steps per output (9 million steps in

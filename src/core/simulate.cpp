@@ -63,6 +63,13 @@ std::string describe_contacts(const Model& model, const Workspace& ws) {
     s << (k ? "; " : "") << "joint '" << model.joints[ws.clearance_joints[k]].name
       << "': delta = " << o.delta << " m, delta_dot = " << o.delta_dot << " m/s, Fn = " << o.f_n
       << " N";
+    // Plain Coulomb at a slip about 0: ±μF_N is discontinuous there (a sticking contact, or a
+    // head-on impact whose slip is round-off), and a run that stalls or underflows there says so.
+    const Clearance& cl = *model.joints[ws.clearance_joints[k]].clearance;
+    if (o.f_n > 0.0 && cl.friction_law == FrictionLaw::coulomb && std::abs(o.v_t) < 1e-6)
+      s << ", vt = " << o.v_t
+        << " m/s (plain Coulomb friction is discontinuous at zero slip, which a sticking or "
+           "head-on contact meets: the ambrosio or adams_stepped law smooths it)";
   }
   if (ws.nc > 0 || ws.nb == 0) return s.str();
   if (strongest >= 0 && most != 0.0) s << "; ";
