@@ -27,6 +27,7 @@ solver: {end_time: 1}
   const double omega = std::sqrt(0.54 * 9.81 * 0.5 / (0.045 + 0.54 * 0.25));
   EXPECT_NEAR(lm.modes[0].frequency, omega / (2 * M_PI), 1e-6 * omega);
   EXPECT_NEAR(lm.modes[0].damping_ratio, 0.0, 1e-6);
+  EXPECT_FALSE(std::signbit(lm.modes[0].damping_ratio));  // `lash modes` printed "-0"
 }
 
 TEST(LinearModes, ASpringDamperOnAGuideHasItsFrequencyAndDampingRatio) {

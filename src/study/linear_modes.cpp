@@ -64,7 +64,7 @@ LinearModes linear_modes(const Model& model) {
     if (std::abs(lam.imag()) <= 1e-9 * std::max(1.0, mag)) {
       out.real_rates.push_back(lam.real());
     } else if (lam.imag() > 0) {
-      out.modes.push_back({mag / (2 * M_PI), -lam.real() / mag, lam});
+      out.modes.push_back({mag / (2 * M_PI), -lam.real() / mag + 0.0, lam});  // + 0: no −0
     }
   }
   std::sort(out.modes.begin(), out.modes.end(),
