@@ -223,6 +223,11 @@ TEST(StudyFile, ProblemsAreLocatedInTheStudyFile) {
   EXPECT_NE(parent.find("s.yaml:4:3: 'drivers.crank2.speed_rpm': no 'drivers.crank2' in the model, did you mean 'crank'? (in run 0)"),
             std::string::npos) << parent;
   EXPECT_NE(typo.find("(in run 0)"), std::string::npos) << typo;
+  // An unknown key beside a parameter of the same joint: the message lists every key of the joint
+  // (clearance among them), and both study paths seemed named, so it had no location.
+  const std::string beside = problems(
+      "set:\n  joints.rod_slider.foo: 1\nparameters:\n  joints.rod_slider.clearance: {values: [1.0e-4]}\n");
+  EXPECT_NE(beside.find("s.yaml:4:3: joint 'rod_slider': unknown key 'foo'"), std::string::npos) << beside;
   const std::string channel =
       problems("parameters:\n  drivers.crank.speed_rpm: {values: [1000]}\nkeep: {channels: [slider.axx]}\n");
   EXPECT_NE(channel.find("no channel 'slider.axx' in the model, did you mean 'slider.ax'?"), std::string::npos)

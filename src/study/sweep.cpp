@@ -124,7 +124,11 @@ Diagnostics study_diagnostics(const std::vector<Diagnostic>& in, const StudySpec
       // A refused value is reported where the model reads it; point at the study's key that
       // set it: the one path whose segments after the first ("rtol" of solver.rtol;
       // "rod_slider" and "clearance" of joints.rod_slider.clearance) the message names.
-      const std::string said = d.element + " " + d.message;
+      // Not the keys the message lists or suggests ("unknown key 'foo', expected one of: type,
+      // journal, ..., clearance, ..." names every key of the joint).
+      std::string said = d.element + " " + d.message;
+      for (const char* list : {", expected one of", ", did you mean"})
+        if (const size_t at = said.find(list); at != std::string::npos) said.erase(at);
       auto names = [&](const std::string& word) {
         for (size_t at = said.find(word); at != std::string::npos; at = said.find(word, at + 1)) {
           const auto part = [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; };
