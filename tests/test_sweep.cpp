@@ -223,6 +223,14 @@ TEST(StudyFile, ProblemsAreLocatedInTheStudyFile) {
   EXPECT_NE(parent.find("s.yaml:4:3: 'drivers.crank2.speed_rpm': no 'drivers.crank2' in the model, did you mean 'crank'? (in run 0)"),
             std::string::npos) << parent;
   EXPECT_NE(typo.find("(in run 0)"), std::string::npos) << typo;
+  EXPECT_NE(problems("parameters:\n  drivers.crank.speed_rpm: {values: [1000, 2000], scale: log}\n")
+                .find("s.yaml:4:58: parameter 'drivers.crank.speed_rpm': scale applies to"),
+            std::string::npos);
+  // A model file where a study goes: one problem (it was one per model section).
+  const std::string model_file = text_problems(lash::test::read_file(example()));
+  EXPECT_NE(model_file.find(":1:1: this is a model file (it has bodies or joints), not a study"),
+            std::string::npos) << model_file;
+  EXPECT_EQ(model_file.find("unknown key"), std::string::npos) << model_file;
   // An unknown key beside a parameter of the same joint: the message lists every key of the joint
   // (clearance among them), and both study paths seemed named, so it had no location.
   const std::string beside = problems(

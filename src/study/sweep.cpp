@@ -182,6 +182,9 @@ void read_parameter(Reader& r, const YAML::Node& key, const YAML::Node& v, Study
     return;
   }
   if (v["values"]) {
+    if (v["scale"])
+      r.error(v["scale"], where + ": scale applies to from/to/count and min/max ranges, not to "
+                                  "values (listed as they are)");
     if (!v["values"].IsSequence() || v["values"].size() == 0) {
       r.error(v["values"], where + ": values must be a non-empty list");
       return;
@@ -323,6 +326,11 @@ StudySpec load_study_text(const std::string& text, const std::string& file,
   if (!root.IsMap())
     throw ModelError({{file, 1, 1, "", "expected a study (a map with study, model, parameters, ...)"}});
   if (auto problems = yaml_structure_problems(text, file); !problems.empty()) throw ModelError(problems);
+  // A model file given where a study goes: one problem, not one per model section.
+  if (!root["study"] && !root["model"] && (root["bodies"] || root["joints"]))
+    throw ModelError({{file, 1, 1, "",
+                       "this is a model file (it has bodies or joints), not a study: `lash run` "
+                       "runs it; a study names it with `model:` (docs/studies.md)"}});
   r.keys(root, {"study", "model", "set", "parameters", "combine", "sampling", "keep", "transient",
                 "lyapunov", "continuation"},
          "study");
