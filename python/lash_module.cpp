@@ -337,14 +337,15 @@ py::dict analyze(const CompiledModel& cm, const py::dict& options) {
     pd["planes"] = p.planes;
     pd["period"] = p.period;
     pd["discarded_periods"] = p.discarded_periods;
-    // One column per variable, also with no point (shape (0, 2k)).
-    const size_t width = p.points.empty() ? p.variables.size() : p.points.front().size();
+    // One column per coordinate, also with no point (shape (0, 2k)).
+    const size_t width = p.points.empty() ? p.coordinates.size() : p.points.front().size();
     std::vector<double> flat;
     for (const auto& pt : p.points) flat.insert(flat.end(), pt.begin(), pt.end());
     pd["points"] = to_numpy(std::move(flat), {static_cast<py::ssize_t>(p.points.size()),
                                               static_cast<py::ssize_t>(width)});
     pd["times"] = to_numpy(std::vector<double>(p.times));
     pd["variables"] = p.variables;
+    pd["coordinates"] = p.coordinates;
     pd["distinct"] = p.distinct;
     pd["tolerance"] = p.tolerance;
     d["poincare"] = pd;

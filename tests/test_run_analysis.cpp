@@ -115,6 +115,10 @@ TEST(RunAnalysis, SubharmonicResponseGivesTwoPoincarePoints) {
   ASSERT_TRUE(r.poincare.has_value());
   EXPECT_GE(r.poincare->points.size(), 18u);
   EXPECT_EQ(r.poincare->distinct, 2);
+  // No clearance joint: every body's x, y and lever, each named (the names said x, y only, of
+  // the first body, beside points of 4 coordinates per body).
+  EXPECT_EQ(r.poincare->coordinates.size(), r.poincare->points.front().size());
+  EXPECT_EQ(r.poincare->coordinates[2].substr(r.poincare->coordinates[2].find('.')), ".lever_x");
   EXPECT_EQ(r.verdict.kind, "periodic");
   EXPECT_FALSE(r.lyapunov.has_value());  // not asked for
 

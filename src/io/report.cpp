@@ -275,6 +275,7 @@ json report_data(const Model& model, const RunAnalysis& a) {
                       {"plane", p.planes.empty() ? json(nullptr) : json(p.planes)},
                       {"period", p.period},
                       {"discarded_periods", p.discarded_periods}, {"variables", p.variables},
+                      {"coordinates", p.coordinates},
                       {"points", pts}, {"times", p.times}, {"distinct", p.distinct},
                       {"tolerance", p.tolerance}};
     json joints = json::array();

@@ -1035,8 +1035,13 @@ RunAnalysis analyze_samples(const Model& model, const AnalysisOptions& o, Plan& 
     if (nc > 0) {
       const std::string& n = model.joints[p.clearance_joints[0]].name;
       ps.variables = {n + ".ex", n + ".ey"};
+      for (int c = 0; c < nc; ++c)
+        for (const char* e : {".ex", ".ey"})
+          ps.coordinates.push_back(model.joints[p.clearance_joints[c]].name + e);
     } else {
       ps.variables = {model.bodies[0].name + ".x", model.bodies[0].name + ".y"};
+      for (const auto& b : model.bodies)
+        for (const char* e : {".x", ".y", ".lever_x", ".lever_y"}) ps.coordinates.push_back(b.name + e);
     }
     for (int c = 0; c < nc; ++c) {
       JointSections js;

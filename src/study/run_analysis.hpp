@@ -160,6 +160,10 @@ struct PoincareSections {
   std::vector<std::vector<double>> points;
   std::vector<double> times;              ///< s, one per point
   std::vector<std::string> variables;     ///< channel names of the first two coordinates
+  /// What every coordinate of a point is, in order: `<joint>.ex`, `<joint>.ey` per clearance
+  /// joint; without one `<body>.x`, `<body>.y`, `<body>.lever_x`, `<body>.lever_y` per body
+  /// (the lever: 0.01 m × (cos φ, sin φ)). The distinct count is over all of them.
+  std::vector<std::string> coordinates;
   int distinct = 0;                       ///< distinct points (count_distinct) within `tolerance`
   double tolerance = 0.0;                 ///< m: 1% of the smallest clearance, 1 µm without one
   /// Every clearance joint's own points and distinct count (the first two coordinates of

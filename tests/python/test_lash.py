@@ -447,7 +447,8 @@ def test_an_empty_poincare_section_has_a_column_per_variable():
     # Five periods discarded of a run of one: no section point, and still (0, 2) as (n, 2k) says.
     m = lash.load(FLORES).set("solver.end_time", 0.012)
     p = lash.analysis.poincare(m, discard_periods=5)
-    assert p["points"].shape == (0, len(p["variables"])) == (0, 2)
+    assert p["points"].shape == (0, len(p["coordinates"])) == (0, 2)
+    assert p["coordinates"] == ["rod_slider.ex", "rod_slider.ey"]
 
 
 def test_every_public_function_has_a_docstring():
