@@ -206,7 +206,10 @@ int finish(StudyFolder& f, int total, const Progress& progress, int interrupted_
   const int recorded = static_cast<int>(f.db().finished().size());
   if (!write_error.empty()) {
     std::cerr << "\nerror: " << write_error << "\n" << recorded << " of " << total
-              << " runs are recorded in " << out << "/study.db; `--resume` runs the rest\n";
+              << " runs are recorded in " << out << "/study.db; "
+              << (recorded < total ? "`--resume` runs the rest"
+                                   : "`--resume` writes runs.csv and sections.csv again")
+              << "\n";
     return kExitIo;
   }
   if (interrupted_by != 0) {
