@@ -715,7 +715,11 @@ def simulate(model: Model | str | os.PathLike, t_end: Optional[float] = None, *,
     keywords = {p: k for p, k in _RUN_KEYWORDS.items()
                 if given[k] is not None and p not in set_by_caller}
     compiled = model.compiled(extra, keywords)
-    return Result(model, compiled, _lash.simulate(compiled), model.overrides + extra)
+    try:
+        raw = _lash.simulate(compiled)
+    except RuntimeError as e:  # no consistent initial state: named with its file, as the CLI does
+        raise RuntimeError(f"{_message_name(model.filename)}: {e}") from None
+    return Result(model, compiled, raw, model.overrides + extra)
 
 
 class Study:

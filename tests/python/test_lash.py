@@ -5,6 +5,7 @@ import csv
 import json
 import math
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -740,3 +741,18 @@ def test_the_spectrum_of_a_result_leaves_out_an_output_off_the_grid():
     s = lash.analysis.spectrum(result, "slider.ax")
     on_grid = lash.analysis.amplitude_spectrum(result["slider.ax"][:-1], 1e-3)
     np.testing.assert_array_equal(s["amplitude"], on_grid["amplitude"])
+
+
+def test_an_assembly_failure_names_the_model_file(tmp_path):
+    # A 1 m link pinned to ground points 10 m apart cannot be assembled: RuntimeError, named with
+    # its file as `lash run` names it (it had no file name).
+    path = tmp_path / "apart.yaml"
+    path.write_text("ground: {markers: {O: [0, 0], P: [10, 0]}}\n"
+                    "bodies:\n  link: {mass: 1, inertia: 0.1, position: [0.5, 0], "
+                    "markers: {A: [-0.5, 0], B: [0.5, 0]}}\n"
+                    "joints:\n  a: {type: revolute, journal: link.A, bearing: ground.O}\n"
+                    "  b: {type: revolute, journal: link.B, bearing: ground.P}\n"
+                    "solver: {end_time: 0.01}\n")
+    with pytest.raises(RuntimeError, match=rf"^{re.escape(str(path))}: "):
+        lash.simulate(lash.load(path))
+
