@@ -13,9 +13,16 @@ namespace lash {
 
 namespace {
 
-/// Largest h·ρ of one tangent RK4 step (ρ = ‖JV‖/‖V‖): RK4's local error is about (h·ρ)⁵/120,
-/// 8e-6 at 0.25.
-constexpr double kTangentSubstep = 0.25;
+/// Largest h·ρ of one tangent RK4 step over the leading vectors (ρ = ‖JV‖/‖V‖, the
+/// kLeadingVectors first columns, the slowest to contract after each QR): RK4's local error is
+/// about (h·ρ)⁵/120, 2.6e-4 at 0.5; on an oscillatory direction its amplitude error (hρ)⁶/144
+/// per step is an exponent error of about (hρ)⁵ ρ/144, 0.004 1/s for ρ = 20 rad/s. The trailing
+/// vectors follow stiff, fast-contracting directions (a contact's), where that error decays;
+/// over them only RK4's stability is kept: h·ρ ≤ kTangentStable (the interval on the negative
+/// real axis is 2.79). docs/analysis.md gives what each bound changes on the examples.
+constexpr double kTangentSubstep = 0.5;
+constexpr int kLeadingVectors = 2;
+constexpr double kTangentStable = 2.7;
 
 /// Tangent vectors carried along the accepted steps of one run (Observer::step): each step
 /// [t0, t1] advances them by one RK4 step of V' = J(t) V, J·V by forward differences of the
@@ -68,10 +75,13 @@ class TangentRider final : public Observer {
     // RK4 is accurate while h·ρ is small (ρ: how fast J turns the tangent vectors, ‖JV‖/‖V‖ at
     // the last step's start). The integrator's steps are not bounded by that: a damped motion
     // that has settled takes steps of many periods, where one RK4 step over h·ρ = 6 gave a
-    // damped oscillator's exponents as −4.9 where they are −1. Such a step is cut into
-    // ⌈h·ρ / kTangentSubstep⌉ RK4 steps on the dense output.
-    const int substeps = static_cast<int>(
-        std::clamp(std::ceil((t1 - t0) * rho_ / kTangentSubstep), 1.0, 10000.0));
+    // damped oscillator's exponents as −4.9 where they are −1. Such a step is cut into RK4 steps
+    // on the dense output: h·ρ ≤ kTangentSubstep over the leading vectors, ≤ kTangentStable over
+    // all.
+    const double h = t1 - t0;
+    const int substeps = static_cast<int>(std::clamp(
+        std::max(std::ceil(h * rho_lead_ / kTangentSubstep), std::ceil(h * rho_all_ / kTangentStable)),
+        1.0, 10000.0));
     // f at each node once: a substep's start is the last one's end, its middle serves two stages.
     struct Node {
       double t = 0.0;
@@ -101,13 +111,15 @@ class TangentRider final : public Observer {
         const Eigen::VectorXd yt = n.y.head(nt_);
         if (!n.have_f && !(n.have_f = f_(t, yt, n.f))) return false;
         if (!forward_difference_jv(f_, t, yt, n.f, V, weights_, step_, JV)) return false;
-        if (first && i == 0) {  // ρ for the next step
-          double r = 0.0;
+        if (first && i == 0) {  // ρ for the next step: the leading vectors', and every one's
+          rho_lead_ = rho_all_ = 0.0;
           for (int c = 0; c < V.cols(); ++c) {
             const double len = V.col(c).cwiseProduct(weights_).norm();
-            if (len > 0.0) r = std::max(r, JV.col(c).cwiseProduct(weights_).norm() / len);
+            if (!(len > 0.0)) continue;
+            const double r = JV.col(c).cwiseProduct(weights_).norm() / len;
+            rho_all_ = std::max(rho_all_, r);
+            if (c < kLeadingVectors) rho_lead_ = std::max(rho_lead_, r);
           }
-          rho_ = r;
         }
         first = false;
         return true;
@@ -116,7 +128,6 @@ class TangentRider final : public Observer {
         return fail(b.t, "the right-hand side cannot be evaluated beside the trajectory");
       a = std::move(b);
     }
-    substeps_ += substeps - 1;
     y_prev_ = y;
     t_prev_ = t1;
     f_prev_ = a.f;
@@ -273,8 +284,9 @@ class TangentRider final : public Observer {
   Eigen::VectorXd weights_, y_prev_, y_ref_, pad_, ydot_;
   double t_prev_;
   Eigen::VectorXd f_prev_;     ///< f at (t_prev_, y_prev_) when have_f_prev_
-  double rho_ = 0.0;           ///< ‖JV‖/‖V‖ (weighted, largest column) at the last step's start
-  long substeps_ = 0;          ///< RK4 steps added by cutting integrator steps (kTangentSubstep)
+  /// ‖JV‖/‖V‖ (weighted, largest column) at the last step's start: of the kLeadingVectors
+  /// first vectors, and of all of them.
+  double rho_lead_ = 0.0, rho_all_ = 0.0;
   bool have_f_prev_ = false;
   FlowRhs f_;
   std::unique_ptr<TangentSpectrum> spectrum_;
