@@ -735,9 +735,10 @@ PYBIND11_MODULE(_lash, m) {
           if (!std::isfinite(min_end))
             throw std::invalid_argument("classify_motion: min_end_time must be a finite time (s), got " +
                                         number(min_end));
-          if (recurring > distinct)
-            throw std::invalid_argument("classify_motion: expected recurring <= distinct (or -1), got " +
-                                        std::to_string(recurring) + " > " + std::to_string(distinct));
+          if (recurring < -1 || recurring > distinct)
+            throw std::invalid_argument("classify_motion: expected 0 <= recurring <= distinct, or -1 "
+                                        "(all recur), got recurring " + std::to_string(recurring) +
+                                        ", distinct " + std::to_string(distinct));
           const lash::Verdict v = lash::classify_motion(lyapunov, period, distinct, sections, peaks,
                                                         min_end, std::nan(""), recurring);
           return py::make_tuple(v.kind, v.evidence);

@@ -154,17 +154,24 @@ TEST(Verdict, WeighsTheEvidence) {
             "the spectrum agrees; the exponent decides");
   // Recurring points still decide first.
   EXPECT_EQ(classify_motion(nan, 0.012, 2, 20, 0, 0.0, 0.9).kind, "periodic");
-  // Few distinct points of which some occur once (a transient decaying onto its orbit, 7 points
-  // met once and the orbit's): not period-8. A clearly negative exponent says the motion
-  // converges; one about 0, quasi-periodic; without one, undetermined.
+  // A transient decaying onto its orbit: 7 points met once, then the orbit's one point 17 times
+  // (a forced damped rotor). It was "period-8 orbit: every point recurs"; it is period-1.
   const Verdict settling = classify_motion(-2.5, 0.2, 8, 24, 0, 0.0, nan, 1);
   EXPECT_EQ(settling.kind, "periodic");
-  EXPECT_NE(settling.evidence[3].find("7 of the 8 distinct points occur once"), std::string::npos)
-      << settling.evidence[3];
-  EXPECT_NE(settling.evidence.back().find("converging"), std::string::npos);
-  EXPECT_EQ(classify_motion(-0.3, 0.2, 8, 24, 0, 0.0, nan, 1).kind, "quasi-periodic");  // λT −0.06
-  EXPECT_EQ(classify_motion(nan, 0.2, 8, 24, 0, 0.0, nan, 1).kind, "undetermined");
-  EXPECT_EQ(classify_motion(nan, 0.2, 8, 24, 0, 0.0, nan, 8).kind, "periodic");
+  EXPECT_EQ(settling.evidence.back(),
+            "period-1 orbit: its points recur, after 7 points met once (a transient: --discard "
+            "leaves them out)");
+  // One leading point before a recurring cluster: period-1 whatever the exponent says.
+  EXPECT_EQ(classify_motion(nan, 0.012, 2, 25, 0, 0.0, nan, 1).kind, "periodic");
+  EXPECT_EQ(classify_motion(30.0, 0.012, 2, 25, 0, 0.0, nan, 1).kind, "periodic");
+  // Most points met once: not periodic, whichever few recur; the exponent decides.
+  EXPECT_EQ(classify_motion(nan, 0.2, 20, 24, 0, 0.0, nan, 2).kind, "undetermined");
+  EXPECT_EQ(classify_motion(50.0, 0.2, 20, 24, 0, 0.0, nan, 2).kind, "chaotic");
+  EXPECT_EQ(classify_motion(-0.3, 0.2, 20, 24, 0, 0.0, nan, 2).kind, "quasi-periodic");  // λT −0.06
+  // A clearly negative exponent with points that do not recur: converging, not quasi-periodic.
+  const Verdict converging = classify_motion(-2.5, 0.2, 20, 24, 0, 0.0, nan, 2);
+  EXPECT_EQ(converging.kind, "periodic");
+  EXPECT_NE(converging.evidence.back().find("converging"), std::string::npos);
   // A damped oscillator decaying to rest: λ = −1 1/s, T = 0.314 s, nothing recurs.
   EXPECT_EQ(classify_motion(-1.0, 0.314, 28, 38, 0).kind, "periodic");
 }

@@ -24,6 +24,7 @@ import numbers
 import operator
 import os
 import re
+from collections.abc import Mapping
 from typing import Any, Dict, Iterable, List, Optional, Sequence
 
 import numpy as np
@@ -67,6 +68,8 @@ def _plain(value: Any) -> Any:
     if isinstance(value, np.floating) and value.dtype.itemsize < 8:
         return _real("value", value)  # np.float32(0.3) is 0.3, as _real takes it
     if isinstance(value, np.ndarray):
+        if value.ndim == 0:  # np.array(1.0): its scalar
+            return _plain(value[()])
         return [_plain(v) for v in value]  # element by element: narrow floats as above
     if not isinstance(value, (str, bytes)) and hasattr(value, "tolist"):
         return _plain(value.tolist())
@@ -103,6 +106,8 @@ def _real(name: str, value: Any, what: str = "a number") -> float:
     TypeError naming the argument `name` otherwise. A NumPy float narrower than a double
     (np.float32(0.002)) is the decimal it prints as (0.002), not its binary value widened
     (0.0020000000949949026)."""
+    if isinstance(value, np.ndarray) and value.ndim == 0:  # np.array(1.0): its scalar
+        value = value[()]
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
         raise TypeError(f"{name}: expected {what}, got {_short(value)} ({type(value).__name__})")
     if isinstance(value, np.floating) and value.dtype.itemsize < 8:
@@ -159,7 +164,7 @@ def _strings(name: str, value: Any, what: str) -> List[str]:
 def _point(name: str, value: Any) -> List[Any]:
     """`value` as a point [x, y] (m): two real numbers; TypeError naming `name` otherwise."""
     if isinstance(value, (str, bytes)) or not isinstance(value, (Sequence, np.ndarray)) \
-            or len(value) != 2:
+            or np.ndim(value) != 1 or len(value) != 2:
         raise TypeError(f"{name}: expected a point [x, y] (m), got {_short(value)} "
                         f"({type(value).__name__})")
     return [_real(f"{name}: x" if i == 0 else f"{name}: y", v) for i, v in enumerate(value)]
@@ -263,7 +268,7 @@ class Model:
         """A rigid body (mass kg, inertia kg*m^2 about the centre of mass, position of the centre
         of mass m, angle rad, markers in body coordinates m); `more` holds any other key of
         docs/model-format.md (e.g. type="point_mass", velocity=[vx, vy])."""
-        if markers is not None and not isinstance(markers, dict):
+        if markers is not None and not isinstance(markers, Mapping):
             raise TypeError(f"markers: expected a dict of marker name to [x, y] (m, body "
                             f"coordinates), got {_short(markers)} ({type(markers).__name__})")
         spec = {"mass": mass, "inertia": inertia, "position": _point("position", position),

@@ -119,8 +119,9 @@ ModeSummary contact_modes(const std::vector<double>& times, const std::vector<bo
 
 const char* verdict_rule() {
   return "after the transient, with at least 16 Poincaré sections (fewer: undetermined, not "
-         "enough periods): periodic (period-k) if the sections hold k <= 8 distinct points, "
-         "k <= sections/2, and each of them recurs; otherwise chaotic if the largest Lyapunov "
+         "enough periods): periodic (period-k) if k <= 8 points recur (each met at least "
+         "twice), 2k <= the sections on them, and the points met once (a transient) are at "
+         "most half the sections; otherwise chaotic if the largest Lyapunov "
          "exponent gives lambda*T > 0.1 per period T, periodic (converging) if lambda*T < -0.1, "
          "quasi-periodic if |lambda*T| <= 0.1; without an exponent, "
          "chaotic if the spectrum's broadband share exceeds 0.5 (continuous), quasi-periodic if it "
@@ -169,16 +170,21 @@ Verdict classify_motion(double lyapunov, double period, int distinct, int sectio
     v.evidence.push_back(s.str());
     return v;
   }
-  const bool few = distinct <= kVerdictMaxPeriod && 2 * distinct <= sections;
-  if (few && recurring == distinct) {
+  // A period-k orbit: k recurring points (each met at least twice) hold all but a transient's
+  // points met once, and those are at most half the sections. (k distinct points with k <=
+  // sections/2 alone called a forced rotor's 7 decaying points and its orbit "period-8".)
+  const int once = distinct - recurring;
+  if (recurring >= 1 && recurring <= kVerdictMaxPeriod && 2 * recurring <= sections - once &&
+      2 * once <= sections) {
     v.kind = "periodic";
-    v.evidence.push_back("period-" + std::to_string(distinct) + " orbit: every point recurs");
+    v.evidence.push_back(
+        "period-" + std::to_string(recurring) + " orbit: " +
+        (once == 0 ? std::string("every point recurs")
+                   : "its points recur, after " + std::to_string(once) + " point" +
+                         (once == 1 ? "" : "s") + " met once (a transient: --discard leaves " +
+                         (once == 1 ? "it" : "them") + " out)"));
     return v;
   }
-  if (few)
-    v.evidence.push_back(std::to_string(distinct - recurring) + " of the " + std::to_string(distinct) +
-                         " distinct points occur once: the motion has not settled onto an orbit "
-                         "(a longer transient, --discard, shows whether it does)");
   if (std::isfinite(growth)) {
     v.kind = growth > kVerdictChaosThreshold    ? "chaotic"
              : growth < -kVerdictChaosThreshold ? "periodic"

@@ -412,6 +412,14 @@ def test_builders_check_their_arguments():
     assert f.overrides[-1] == "joints.rod_slider.clearance=0.00025"
     g = lash.Model.new("g", gravity=np.array([0, -9.81], dtype=np.float32))
     assert "-9.81]" in g.text()
+    # 0-d arrays are their scalars, and any mapping holds markers (both refused for a while).
+    import types
+    z = lash.Model.new("z").add_body("b", mass=np.array(1.0), inertia=1.0, position=[0, 0],
+                                     markers=types.MappingProxyType({"A": [0.1, 0]}))
+    z.add_clearance_joint("pin", journal="b.A", bearing="ground.O", clearance=np.array(5e-4))
+    assert "mass: 1" in z.text() and "clearance: 0.0005" in z.text(), z.text()
+    f.data["bodies"]["slider"]["inertia"] = np.array(2e-4)
+    assert "2e-4" in f.text().lower() or "0.0002" in f.text()
 
 
 def test_messages_name_only_what_the_message_is_about():
