@@ -94,8 +94,8 @@ const char* verdict_rule();
 /// there is; `non_harmonic_peaks` (strong spectral peaks off the driving harmonics, −1: none
 /// computed) is listed as evidence only. `min_end_time` (s, 0: unknown) is the end_time that
 /// would give enough sections, quoted when there are too few. `recurring` (count_recurring; −1:
-/// not computed, taken as `distinct`) is how many of the distinct points recur: a period-k
-/// verdict needs all k.
+/// not computed, taken as `distinct`) is how many of the distinct points recur: k of them make a
+/// period-k orbit, the others (met once) a transient, at most half the sections.
 Verdict classify_motion(double lyapunov, double period, int distinct, int sections,
                         int non_harmonic_peaks, double min_end_time = 0.0,
                         double broadband = std::nan(""), int recurring = -1);
