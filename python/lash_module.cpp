@@ -685,11 +685,18 @@ PYBIND11_MODULE(_lash, m) {
     out << to_yaml(data);
     return std::string(out.c_str()) + "\n";
   }, py::arg("data"), "Python data as YAML text (yaml-cpp's emitter).");
-  m.def("parse_yaml", [](const std::string& text) {
+  m.def("parse_yaml", [](const std::string& text, const std::string& filename) {
           long values = 0;
-          return from_yaml(YAML::Load(text), values);
+          py::object data = from_yaml(YAML::Load(text), values);
+          // A duplicate key (the parser keeps one value) or a second document (it reads the
+          // first): refused as the loader refuses them, not dropped from the data.
+          if (auto problems = lash::yaml_structure_problems(text, filename); !problems.empty())
+            throw lash::ModelError(problems);
+          return data;
         },
-        py::arg("text"), "YAML text as Python data (yaml-cpp's parser).");
+        py::arg("text"), py::arg("filename"),
+        "YAML text as Python data (yaml-cpp's parser); ModelError on duplicate keys or a second "
+        "document.");
 
   // --- the model-free analysis functions (analysis/) ----------------------------------------
   m.def("amplitude_spectrum",

@@ -255,6 +255,12 @@ TEST(StudyFile, ProblemsAreLocatedInTheStudyFile) {
             std::string::npos);
   EXPECT_NE(problems("parameters:\n  drivers.crank.speed_rpm: {min: 1, max: 2}\n").find("add sampling"),
             std::string::npos);
+  // zip with a sampled parameter: said once, with no count of the drawn parameter's "0 levels".
+  const std::string zip = problems("combine: zip\nsampling: {method: random, count: 4}\nparameters:\n"
+                                   "  drivers.crank.speed_rpm: {min: 1000, max: 2000}\n"
+                                   "  joints.rod_slider.clearance: {values: [1.0e-4, 2.0e-4]}\n");
+  EXPECT_NE(zip.find("s.yaml:3:10: combine: zip is for listed levels"), std::string::npos) << zip;
+  EXPECT_EQ(zip.find("has 0"), std::string::npos) << zip;
   // Duplicate keys: refused with both places, as in model files.
   const std::string dup = problems("transient: {periods: 1}\ntransient: {periods: 2}\nparameters:\n"
                                    "  drivers.crank.speed_rpm: {values: [1000]}\n");
@@ -268,7 +274,7 @@ TEST(StudyFile, ProblemsAreLocatedInTheStudyFile) {
   try {
     load_study_text("study: ramp\nmodel: " + ramp_model.string() +
                         "\nparameters:\n  joints.rod_slider.clearance: {values: [2.0e-4]}\n"
-                        "transient: {periods: 2}\ncontinuation: up\n",
+                        "transient: {periods: 2}\ncontinuation: up\nkeep: {sections: [slider.x]}\n",
                     "s.yaml", [](const std::string& p) { return lash::test::read_file(p); });
   } catch (const ModelError& e) {
     ramp = e.what();
@@ -276,9 +282,15 @@ TEST(StudyFile, ProblemsAreLocatedInTheStudyFile) {
   fs::remove(ramp_model);
   EXPECT_NE(ramp.find("s.yaml:5:12: transient: periods needs a constant-speed rotary driver"), std::string::npos) << ramp;
   EXPECT_NE(ramp.find("s.yaml:6:15: continuation: needs a constant-speed rotary driver"), std::string::npos) << ramp;
+  // Sections are taken once per driver period: without one, none would be recorded (silently).
+  EXPECT_NE(ramp.find("s.yaml:7:18: keep: sections are taken once per period of a constant-speed"), std::string::npos) << ramp;
   // Metric-like parameter names would share runs.csv's columns with the metrics.
   EXPECT_NE(problems("parameters:\n  rod_slider.Fn.peak: {cases: {a: {}}}\n").find("named like a metric"),
             std::string::npos);
+  // Column names ignore case: 'Direction' is the metric column 'direction' (it passed).
+  for (const char* name : {"Direction", "rod_slider.Fn.PEAK", "SECTIONS"})
+    EXPECT_NE(problems(std::string("parameters:\n  ") + name + ": {cases: {a: {}, b: {}}}\n").find("named like a metric"),
+              std::string::npos) << name;
   // Parameters are database columns: no duplicates, none named like a run's own columns.
   EXPECT_NE(problems("parameters:\n  status: {cases: {a: {}, b: {}}}\n").find("s.yaml:4:3: parameter 'status': a name every run's row has"),
             std::string::npos) << problems("parameters:\n  status: {cases: {a: {}, b: {}}}\n");

@@ -226,7 +226,7 @@ class Model:
         Reading it from a loaded file drops the file's comments from what `save` writes."""
         if self._data is None:
             try:
-                self._data = _lash.parse_yaml(self._text or "") or {}
+                self._data = _lash.parse_yaml(self._text or "", _message_name(self.filename)) or {}
             except RuntimeError as e:  # yaml-cpp's parser: "yaml-cpp: error at line 3, column 5: ..."
                 m = re.match(r"yaml-cpp: error at line (\d+), column (\d+): (.*)", str(e), re.S)
                 line, column, what = (int(m.group(1)), int(m.group(2)), m.group(3)) if m else (0, 0, str(e))

@@ -385,7 +385,7 @@ StudySpec load_study_text(const std::string& text, const std::string& file,
     for (const auto& kv : params) {
       const std::string n = kv.first.as<std::string>("");
       if (n.empty()) r.error(kv.first, "parameters: an empty name");
-      else if (metric_like(n))
+      else if (metric_like(lower(n)))
         r.error(kv.first, "parameter '" + n + "': named like a metric or column of the results "
                                               "(docs/studies.md); call it otherwise");
       else if (!seen.insert(lower(n)).second)
@@ -469,7 +469,7 @@ StudySpec load_study_text(const std::string& text, const std::string& file,
     r.error(root["sampling"], "sampling: no parameter has min/max to draw");
   if (any_sampled && spec.combine == "zip")
     r.error(root["combine"], "combine: zip is for listed levels; sampled parameters are drawn together");
-  if (spec.combine == "zip") {
+  if (spec.combine == "zip" && !any_sampled) {
     for (const auto& p : spec.parameters)
       if (p.values.size() != spec.parameters.front().values.size())
         r.error(params, "combine: zip needs the same number of levels for every parameter ('" +
@@ -625,6 +625,10 @@ StudySpec load_study_text(const std::string& text, const std::string& file,
   if (!constant_speed && spec.discard_time < 0 && root["transient"] && root["transient"]["periods"])
     r.error(root["transient"], "transient: periods needs a constant-speed rotary driver, which the "
                                "model has not; give the transient in seconds: {time: S}");
+  if (!spec.section_channels.empty() && !constant_speed)
+    r.error(root["keep"]["sections"], "keep: sections are taken once per period of a constant-speed "
+                                      "rotary driver, which the model has not; keep channels or series "
+                                      "instead");
   if (!spec.continuation.empty() && !constant_speed)
     r.error(root["continuation"], "continuation: needs a constant-speed rotary driver (the hand-over "
                                   "keeps the crank angle), which the model has not");

@@ -736,6 +736,9 @@ def test_arguments_are_named_in_what_they_cause(tmp_path):
     # Not YAML: a ModelError at the file's line and column (yaml-cpp's RuntimeError before).
     with pytest.raises(lash.ModelError, match=r"^x.yaml:2:2: not valid YAML: end of sequence"):
         lash.Model("a: [1, 2\nb: 3\n", filename="x.yaml").data
+    # A duplicate key: refused with both places, as lash.loads does (the parser kept the last).
+    with pytest.raises(lash.ModelError, match=r"^x.yaml:2:1: duplicate key 'a' \(first at line 1"):
+        lash.Model("a: 1\na: 2\n", filename="x.yaml").data
     # A channel's name in another case: that channel is the hint ("slider.y" before).
     with pytest.raises(KeyError, match="did you mean 'slider.ax'"):
         lash.simulate(FLORES, 1e-4)["slider.AX"]
