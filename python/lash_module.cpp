@@ -730,7 +730,7 @@ PYBIND11_MODULE(_lash, m) {
         py::arg("points"), py::arg("tol"));
   m.def("classify_motion",
         [](double lyapunov, double period, int distinct, int sections, int peaks, double min_end,
-           int recurring) {
+           int recurring, double contraction) {
           if (distinct < 0 || sections < 0 || distinct > sections)
             throw std::invalid_argument(
                 "classify_motion: expected 0 <= distinct <= sections (distinct points among the "
@@ -746,13 +746,28 @@ PYBIND11_MODULE(_lash, m) {
             throw std::invalid_argument("classify_motion: expected 0 <= recurring <= distinct, or -1 "
                                         "(all recur), got recurring " + std::to_string(recurring) +
                                         ", distinct " + std::to_string(distinct));
+          if (contraction < 0 || std::isinf(contraction))
+            throw std::invalid_argument("classify_motion: contraction must be a finite ratio >= 0 "
+                                        "(section_contraction), or NaN when none was computed; got " +
+                                        number(contraction));
           const lash::Verdict v = lash::classify_motion(lyapunov, period, distinct, sections, peaks,
-                                                        min_end, std::nan(""), recurring);
+                                                        min_end, std::nan(""), recurring, contraction);
           return py::make_tuple(v.kind, v.evidence);
         },
         py::arg("lyapunov"), py::arg("period"), py::arg("distinct"), py::arg("sections"),
         py::arg("non_harmonic_peaks") = -1, py::arg("min_end_time") = 0.0,
-        py::arg("recurring") = -1);
+        py::arg("recurring") = -1, py::arg("contraction") = std::nan(""));
+  m.def("section_contraction",
+        [](const std::vector<std::vector<double>>& points) {
+          for (size_t i = 1; i < points.size(); ++i)
+            if (points[i].size() != points[0].size())
+              throw std::invalid_argument(
+                  "section_contraction: every point must have the same number of coordinates, got "
+                  "points[0] with " + std::to_string(points[0].size()) + " and points[" +
+                  std::to_string(i) + "] with " + std::to_string(points[i].size()));
+          return lash::section_contraction(points);
+        },
+        py::arg("points"));
   m.def("verdict_rule", [] { return std::string(lash::verdict_rule()); });
   m.def("contact_modes",
         [](const std::vector<double>& times, const std::vector<bool>& onset,

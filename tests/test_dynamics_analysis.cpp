@@ -174,6 +174,38 @@ TEST(Verdict, WeighsTheEvidence) {
   EXPECT_NE(converging.evidence.back().find("converging"), std::string::npos);
   // A damped oscillator decaying to rest: λ = −1 1/s, T = 0.314 s, nothing recurs.
   EXPECT_EQ(classify_motion(-1.0, 0.314, 28, 38, 0).kind, "periodic");
+  // A lightly damped one (λ = −0.1 1/s, T = 0.5 s: λT = −0.05, inside the quasi-periodic band)
+  // was "quasi-periodic" at rest-convergence; the returns shrinking to 0.24 make it converging,
+  // while returns that keep their size (0.9: a torus) leave it quasi-periodic.
+  const Verdict slow = classify_motion(-0.1, 0.5, 40, 40, 1, 0.0, nan, 0, 0.24);
+  EXPECT_EQ(slow.kind, "periodic");
+  EXPECT_NE(slow.evidence.back().find("converging: lambda*T < 0 and the points' returns shrank to 0.24"),
+            std::string::npos) << slow.evidence.back();
+  EXPECT_EQ(classify_motion(-0.1, 0.5, 40, 40, 1, 0.0, nan, 0, 0.9).kind, "quasi-periodic");
+  EXPECT_EQ(classify_motion(-0.1, 0.5, 40, 40, 1, 0.0, nan, 0, nan).kind, "quasi-periodic");
+  // Shrinking returns with a positive exponent (inside the band): not converging.
+  EXPECT_EQ(classify_motion(0.1, 0.5, 40, 40, 1, 0.0, nan, 0, 0.24).kind, "quasi-periodic");
+}
+
+TEST(Verdict, SectionContractionMeasuresHowTheReturnsShrink) {
+  // A damped oscillator sampled every 0.5 s (ω = 10 rad/s, λ = −0.1 1/s): its points rotate by
+  // 5 rad and shrink by exp(−0.05) per section, so the returns shrink by exp(−0.05 · 22) = 0.33
+  // from the first third of the 32 returns (points 0–9) to the last (22–31): the medians' ratio.
+  std::vector<std::vector<double>> decaying, torus;
+  for (int i = 0; i < 40; ++i) {
+    const double r = std::exp(-0.05 * i), a = 5.0 * i;
+    decaying.push_back({r * std::cos(a), r * std::sin(a)});
+    torus.push_back({std::cos(a), std::sin(a)});  // the same rotation, no decay
+  }
+  EXPECT_NEAR(section_contraction(decaying), std::exp(-0.05 * 22), 1e-12);
+  EXPECT_NEAR(section_contraction(torus), 1.0, 1e-12);
+  // A period-2 orbit approached geometrically: each point's return is to the point two later.
+  std::vector<std::vector<double>> two;
+  for (int i = 0; i < 30; ++i) two.push_back({(i % 2 ? 1.0 : -1.0) + 0.5 * std::exp(-0.2 * i), 0.0});
+  EXPECT_LT(section_contraction(two), 0.05);
+  // Too few points (fewer than 4 with 8 successors), or a first third already at rest: NaN.
+  EXPECT_TRUE(std::isnan(section_contraction(std::vector<std::vector<double>>(11, {1.0, 2.0}))));
+  EXPECT_TRUE(std::isnan(section_contraction(std::vector<std::vector<double>>(30, {1.0, 2.0}))));
 }
 
 TEST(Verdict, CountsTheDistinctPointsThatRecur) {

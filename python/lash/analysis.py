@@ -2,7 +2,7 @@
 
 A run with its analyses (C++ `lash::analyze_run`, what `lash run --report` and `lash analyze`
 compute) — `analyze`, and `poincare`, `verdict`, `spectra` taking the parts of it — and the
-model-free functions of src/analysis one to one: `amplitude_spectrum`, `count_distinct`,
+model-free functions of src/analysis one to one: `amplitude_spectrum`, `count_distinct`, `section_contraction`,
 `classify_motion`, `verdict_rule`, `contact_modes`, `decimate_min_max`.
 """
 from __future__ import annotations
@@ -16,7 +16,7 @@ import numpy as np
 from . import _lash, _flag, _integer, _real, _short, _string, _strings
 
 __all__ = ["analyze", "poincare", "verdict", "spectra", "spectrum", "amplitude_spectrum",
-           "count_distinct", "classify_motion", "verdict_rule", "contact_modes",
+           "count_distinct", "section_contraction", "classify_motion", "verdict_rule", "contact_modes",
            "decimate_min_max"]
 
 
@@ -236,11 +236,11 @@ def count_distinct(points, tol: float) -> int:
 
 def classify_motion(lyapunov: float, period: float, distinct: int, sections: int,
                     non_harmonic_peaks: int = -1, min_end_time: float = 0.0,
-                    recurring: int = -1) -> Tuple[str, list]:
+                    recurring: int = -1, contraction: float = math.nan) -> Tuple[str, list]:
     """The verdict rule (verdict_rule()) on its inputs: largest Lyapunov exponent (1/s, NaN if not
-    computed), period (s; 0 or NaN: none), distinct Poincare points, sections taken, and how many
-    of the distinct points recur (-1: all). Returns (kind, evidence). Raises ValueError for a
-    negative period."""
+    computed), period (s; 0 or NaN: none), distinct Poincare points, sections taken, how many
+    of the distinct points recur (-1: all), and how their returns shrink (section_contraction;
+    NaN: not computed). Returns (kind, evidence). Raises ValueError for a negative period."""
     period = _real("period", period, "a period (s)")
     if period < 0 or math.isinf(period):
         raise ValueError(f"period: expected a finite period (s) > 0, or 0 or NaN for none, got {period!r}")
@@ -249,7 +249,20 @@ def classify_motion(lyapunov: float, period: float, distinct: int, sections: int
                                  _c_int("distinct", distinct), _c_int("sections", sections),
                                  _c_int("non_harmonic_peaks", non_harmonic_peaks),
                                  _real("min_end_time", min_end_time, "a time (s)"),
-                                 _c_int("recurring", recurring))
+                                 _c_int("recurring", recurring),
+                                 _real("contraction", contraction, "a ratio"))
+
+
+def section_contraction(points: Any) -> float:
+    """How Poincare points' returns shrink: each point's distance to the nearest of the next 8,
+    the median over the last third of the points that have 8 successors divided by the median
+    over the first third (docs/analysis.md, the verdict rule). About 1 on a torus, below 1 where
+    the points close in on an orbit or rest; NaN with fewer than 12 points."""
+    if isinstance(points, (str, bytes)) or not hasattr(points, "__iter__"):
+        raise TypeError(f"points: expected a sequence of points (each a sequence of numbers), "
+                        f"got {_short(points)} ({type(points).__name__})")
+    rows = [_vector(f"points[{i}]", p).tolist() for i, p in enumerate(points)]
+    return _lash.section_contraction(rows)
 
 
 def verdict_rule() -> str:

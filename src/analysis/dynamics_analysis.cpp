@@ -1,5 +1,6 @@
 #include "analysis/dynamics_analysis.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -41,6 +42,31 @@ int count_recurring(const std::vector<std::vector<double>>& points, double tol) 
   int recurring = 0;
   for (int n : cluster_sizes(points, tol)) recurring += n >= 2;
   return recurring;
+}
+
+double section_contraction(const std::vector<std::vector<double>>& points) {
+  const int n = static_cast<int>(points.size()) - kVerdictMaxPeriod;  // points with 8 successors
+  if (n < 4) return std::nan("");
+  std::vector<double> returns(n);
+  for (int i = 0; i < n; ++i) {
+    double best = std::numeric_limits<double>::infinity();
+    for (int j = i + 1; j <= i + kVerdictMaxPeriod; ++j) {
+      double d2 = 0;
+      for (size_t c = 0; c < points[i].size(); ++c)
+        d2 += (points[i][c] - points[j][c]) * (points[i][c] - points[j][c]);
+      best = std::min(best, d2);
+    }
+    returns[i] = std::sqrt(best);
+  }
+  const int third = n / 3;
+  auto median = [](std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    const size_t m = v.size() / 2;
+    return v.size() % 2 ? v[m] : 0.5 * (v[m - 1] + v[m]);
+  };
+  const double first = median({returns.begin(), returns.begin() + third});
+  const double last = median({returns.end() - third, returns.end()});
+  return first > 0 ? last / first : std::nan("");
 }
 
 LyapunovResult largest_lyapunov(
@@ -123,14 +149,16 @@ const char* verdict_rule() {
          "twice), 2k <= the sections on them, and the points met once (a transient) are at "
          "most half the sections; otherwise chaotic if the largest Lyapunov "
          "exponent gives lambda*T > 0.1 per period T, periodic (converging) if lambda*T < -0.1, "
-         "quasi-periodic if |lambda*T| <= 0.1; without an exponent, "
+         "or if lambda*T < 0 and the points' returns (each one's distance to the nearest of the "
+         "next 8) shrink to at most half from the first third of the sections to the last, "
+         "quasi-periodic otherwise when |lambda*T| <= 0.1; without an exponent, "
          "chaotic if the spectrum's broadband share exceeds 0.5 (continuous), quasi-periodic if it "
          "is below 0.1 (discrete), else undetermined";
 }
 
 Verdict classify_motion(double lyapunov, double period, int distinct, int sections,
                         int non_harmonic_peaks, double min_end_time, double broadband,
-                        int recurring) {
+                        int recurring, double contraction) {
   if (recurring < 0) recurring = distinct;
   Verdict v;
   std::ostringstream s;
@@ -193,6 +221,16 @@ Verdict classify_motion(double lyapunov, double period, int distinct, int sectio
       s << "converging: lambda*T < -" << kVerdictChaosThreshold
         << ", nearby trajectories close in on an attracting orbit (or rest) whose points have "
            "not all recurred yet";
+      v.evidence.push_back(s.str());
+      s.str("");
+    } else if (v.kind == "quasi-periodic" && growth < 0 && contraction <= kVerdictContraction) {
+      // A slow convergence (light damping, or a period short beside the decay time): λT is
+      // within the finite-time tolerance of 0, but the points close in period after period.
+      v.kind = "periodic";
+      s << "converging: lambda*T < 0 and the points' returns shrank to " << contraction
+        << " of their size from the first third of the sections to the last (<= "
+        << kVerdictContraction << "): an attracting orbit (or rest) whose points have not all "
+           "recurred yet";
       v.evidence.push_back(s.str());
       s.str("");
     }

@@ -83,6 +83,18 @@ constexpr double kVerdictChaosThreshold = 0.1;
 constexpr double kVerdictDiscreteSpectrum = 0.1;
 constexpr double kVerdictBroadbandSpectrum = 0.5;
 
+/// Returns that shrink to at most this share of their size (section_contraction), with
+/// λT < 0, make points that do not recur yet a converging orbit rather than a quasi-periodic one.
+constexpr double kVerdictContraction = 0.5;
+
+/// How the Poincaré points' returns shrink: each point's return is its distance to the nearest
+/// of the next kVerdictMaxPeriod points (|p_i − p_(i+k)| on a period-k orbit, k <= 8); the
+/// median of the returns of the last third of the points that have 8 successors, over the median
+/// of the first third's. About 1 on a torus or an attractor the points keep covering; below 1
+/// where they close in on an orbit or a rest position (a damped transient: exp(λT·n) after n
+/// periods). NaN with fewer than 12 points (4 returns), or returns of 0 in the first third.
+double section_contraction(const std::vector<std::vector<double>>& points);
+
 /// The rule classify_motion applies, in the words analyze, report and summary.json print.
 const char* verdict_rule();
 
@@ -95,9 +107,12 @@ const char* verdict_rule();
 /// computed) is listed as evidence only. `min_end_time` (s, 0: unknown) is the end_time that
 /// would give enough sections, quoted when there are too few. `recurring` (count_recurring; −1:
 /// not computed, taken as `distinct`) is how many of the distinct points recur: k of them make a
-/// period-k orbit, the others (met once) a transient, at most half the sections.
+/// period-k orbit, the others (met once) a transient, at most half the sections. `contraction`
+/// (section_contraction; NaN: not computed) tells a slow convergence (|λT| <= 0.1 but the
+/// returns shrinking) from quasi-periodic motion.
 Verdict classify_motion(double lyapunov, double period, int distinct, int sections,
                         int non_harmonic_peaks, double min_end_time = 0.0,
-                        double broadband = std::nan(""), int recurring = -1);
+                        double broadband = std::nan(""), int recurring = -1,
+                        double contraction = std::nan(""));
 
 }  // namespace lash

@@ -1015,6 +1015,7 @@ RunAnalysis analyze_samples(const Model& model, const AnalysisOptions& o, Plan& 
   }
   const int distinct = count_distinct(sa.sections, tol);
   const int recurring = count_recurring(sa.sections, tol);
+  const double contraction = section_contraction(sa.sections);  // (sa.sections moves on below)
   const int n_sections = static_cast<int>(sa.sections.size());
   // The period the exponent is weighed against, and the run that would give enough sections:
   // stroboscopic sections fall at k·T for k >= the discarded periods; event-based ones at the
@@ -1132,7 +1133,7 @@ RunAnalysis analyze_samples(const Model& model, const AnalysisOptions& o, Plan& 
 
   const Verdict v =
       classify_motion(lyap, verdict_period, distinct, n_sections, off_harmonic, min_end_time,
-                      broadband, recurring);
+                      broadband, recurring, contraction);
   out.verdict.kind = v.kind;
   out.verdict.evidence = v.evidence;
   out.verdict.rule = verdict_rule();

@@ -229,6 +229,17 @@ def test_analysis():
     assert lash.analysis.count_distinct([[0, 0], [1e-9, 0], [1, 1]], 1e-6) == 2
     kind, evidence = lash.analysis.classify_motion(float("nan"), 0.012, 1, 20)
     assert kind == "periodic" and evidence
+    # A lightly damped oscillator's points (λT = -0.05): returns shrinking to exp(-0.05 * 22)
+    # make the verdict converging ("periodic"); returns that keep their size, quasi-periodic.
+    decaying = [[math.exp(-0.05 * i) * math.cos(5.0 * i), math.exp(-0.05 * i) * math.sin(5.0 * i)]
+                for i in range(40)]
+    c = lash.analysis.section_contraction(decaying)
+    assert c == pytest.approx(math.exp(-0.05 * 22), rel=1e-12)
+    assert lash.analysis.classify_motion(-0.1, 0.5, 40, 40, 1, 0.0, 0, c)[0] == "periodic"
+    assert lash.analysis.classify_motion(-0.1, 0.5, 40, 40, 1, 0.0, 0, 0.9)[0] == "quasi-periodic"
+    assert math.isnan(lash.analysis.section_contraction([[0.0, 0.0]] * 5))
+    with pytest.raises(ValueError, match="contraction must be a finite ratio"):
+        lash.analysis.classify_motion(-0.1, 0.5, 40, 40, 1, 0.0, 0, -1.0)
     with pytest.raises(ValueError, match="window"):
         lash.analysis.amplitude_spectrum(np.ones(8), 1e-3, "hamming")
 
