@@ -102,6 +102,31 @@ TEST(RunAnalysis, IdealSliderCrankIsPeriodicWithOnePoincarePoint) {
   EXPECT_NE(r.lyapunov->message.find("no free degree of freedom"), std::string::npos) << r.lyapunov->message;
 }
 
+TEST(RunAnalysis, ALightlyDampedOscillatorSettlingToRestIsConverging) {
+  // m = 2 kg, k = 200 N/m, c = 0.4 N·s/m: ω = 10 rad/s, ζω = 0.1 1/s. Seen every 0.5 s, λT =
+  // −0.05, inside the quasi-periodic band, and the verdict was "quasi-periodic" while the
+  // points closed in on rest; the shrinking returns (exp(−0.05 · 22) = 0.33 in exact
+  // arithmetic) now make it converging.
+  const std::string yaml = R"Y(
+ground: {markers: {O: [0, 0]}}
+bodies: {m: {mass: 2.0, position: [0.2, 0]}}
+joints: {g: {type: translational, guide: ground.O, slider: m, axis: [1, 0]}}
+loads: {s: {type: spring_damper, from: ground, to: m, stiffness: 200, damping: 0.4, free_length: 0.1}}
+solver: {end_time: 20.0, output_interval: 0.01, rtol: 1e-10, atol: 1e-13, initial_state: given}
+)Y";
+  AnalysisOptions o;
+  o.period = 0.5;
+  const Analysed a = analyse(yaml, {}, o);
+  const RunAnalysis& r = a.run;
+  ASSERT_TRUE(r.result.status.ok) << r.result.status.message;
+  EXPECT_NEAR(r.verdict.lyapunov_exponent, -0.1, 2e-3);
+  EXPECT_EQ(r.verdict.kind, "periodic");
+  bool converging = false;
+  for (const auto& e : r.verdict.evidence)
+    converging |= e.find("converging: lambda*T < 0 and the points' returns shrank to 0.") != std::string::npos;
+  EXPECT_TRUE(converging) << r.verdict.evidence.back();
+}
+
 TEST(RunAnalysis, SubharmonicResponseGivesTwoPoincarePoints) {
   // A flywheel turning at ω sets the period T = 2π/ω; a mass on a spring tuned to ω/2 moves
   // x = x0 cos(ωt/2): sampled every T it alternates between +x0 and −x0: a period-2 orbit.
