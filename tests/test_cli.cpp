@@ -587,6 +587,23 @@ TEST(Cli, ARunStalledByPlainCoulombFrictionSaysSo) {
                                  (dir / "smooth").string() +
                                  " --set 'joints.cj.friction={law: ambrosio, mu: 0.1, v0: 1e-4, v1: 1e-3}'");
   EXPECT_EQ(smooth.code, 0) << smooth.out;
+  // The other case the docs name: a spinning journal pressed on its bearing's wall by 100 N
+  // stops spinning at 1.05 ms and sticks; the slip then chatters about 5e-5 m/s, and the hint
+  // was left out (it asked for |vt| < 1e-6).
+  std::ofstream(dir / "stick.yaml")
+      << "ground: {markers: {B: [0, 0]}}\nbodies:\n  c: {mass: 1.0, position: [0.000501318, 0]}\n"
+         "  j: {mass: 1.0, inertia: 1.0e-3, position: [0.000501318, 0], angular_velocity: 0.1}\n"
+         "joints:\n  hub: {type: revolute, journal: j, bearing: c}\n"
+         "  slide: {type: translational, guide: ground.B, slider: c, axis: [1, 0]}\n"
+         "  cj: {type: revolute, journal: j, bearing: ground.B, clearance: 0.5e-3, journal_radius: "
+         "9.5e-3, normal_law: hertz, stiffness: 6.6101983978968e10, friction: {law: coulomb, mu: 0.1}}\n"
+         "loads:\n  push: {type: force, point: c, fx: 100}\n"
+         "solver: {end_time: 0.01, output_interval: 1e-3, rtol: 1e-9, atol: 1e-13, initial_state: "
+         "given, max_steps: 200000}\n";
+  const Result stick = run_lash("run " + (dir / "stick.yaml").string() + " -q -o " + (dir / "stick").string());
+  EXPECT_EQ(stick.code, 1) << stick.out;
+  EXPECT_NE(stick.out.find("(plain Coulomb friction is discontinuous at zero slip"), std::string::npos)
+      << stick.out;
   fs::remove_all(dir);
 }
 

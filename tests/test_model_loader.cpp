@@ -690,3 +690,21 @@ TEST(ModelLoader, OnlyRegularFilesOfBoundedSizeAreRead) {
               "/dev/zero: cannot read the model file: not a regular file (expected a text file)");
   }
 }
+
+TEST(Contact, TheMaterialsStiffnessIsForExponentOnePointFiveOnly) {
+  // Hertz's K from the materials is in N/m^1.5; with exponent 1 and no stiffness it was used as
+  // N/m, silently: a force of the wrong size and unit.
+  const auto d = problems(with("    normal_law: lankarani_nikravesh\n",
+                               "    normal_law: lankarani_nikravesh\n    exponent: 1.0\n"));
+  ASSERT_EQ(d.size(), 1u);
+  EXPECT_EQ(d[0].str(), "model.yaml:28:15: joint 'gudgeon': exponent 1 needs the contact 'stiffness' "
+                        "(N/m^exponent): the stiffness derived from the materials is Hertz's, in "
+                        "N/m^1.5, for exponent 1.5 only");
+  // With its stiffness given, or at 1.5, it loads.
+  EXPECT_TRUE(problems(with("    normal_law: lankarani_nikravesh\n",
+                            "    normal_law: lankarani_nikravesh\n    exponent: 1.0\n    stiffness: 1.0e9\n"))
+                  .empty());
+  EXPECT_TRUE(problems(with("    normal_law: lankarani_nikravesh\n",
+                            "    normal_law: lankarani_nikravesh\n    exponent: 1.5\n"))
+                  .empty());
+}

@@ -1,4 +1,5 @@
 #include "io/model_loader.hpp"
+#include "io/number_format.hpp"
 
 #include "core/finalize.hpp"
 
@@ -681,6 +682,12 @@ class Loader {
         r_.error(s.where(), s.element(),
                  "give the contact 'stiffness' or a 'material' {youngs_modulus, poisson_ratio} "
                  "(here or in clearance_defaults)");
+      } else if (cl.contact.exponent != 1.5) {
+        // The materials' K is in N/m^1.5: used with another n it was a wrong force, silently.
+        r_.error(c.has("exponent") ? c.get("exponent") : s.where(), s.element(),
+                 "exponent " + shortest_number(cl.contact.exponent) +
+                     " needs the contact 'stiffness' (N/m^exponent): the stiffness derived from "
+                     "the materials is Hertz's, in N/m^1.5, for exponent 1.5 only");
       } else {  // the stiffness is derived from the materials by finalize
         cl.journal_material = mj;
         cl.bearing_material = mb;
