@@ -61,7 +61,7 @@ def claims(runs):
         f"in the example: r ω² (1 + r/L) = g). Below it, {quiet} of {len(below)} runs keep both "
         f"journals' free-flight share at or below {FREE:.2f} (largest "
         f"{max((s for _, _, s in below), default=float('nan')):.3f}); above it, {flying} of "
-        f"{len(above)} runs exceed it (smallest "
+        f"{len(above)} runs exceed it (each run's larger share of its two journals; smallest "
         f"{min((s for _, _, s in above), default=float('nan')):.3f}) — **{word}**."]
     # Clearance and speed raise the peak contact force above the threshold (the source paper's
     # abstract: clearance size and driving speed influence the dynamic behaviour).
