@@ -714,14 +714,18 @@ PYBIND11_MODULE(_lash, m) {
           return d;
         },
         py::arg("x"), py::arg("dt"), py::arg("window") = "hann");
+  // Points of one dimension each (`function` names the caller in the message).
+  const auto check_points = [](const std::vector<std::vector<double>>& points, const char* function) {
+    for (size_t i = 1; i < points.size(); ++i)
+      if (points[i].size() != points[0].size())
+        throw std::invalid_argument(
+            std::string(function) + ": every point must have the same number of coordinates, got "
+            "points[0] with " + std::to_string(points[0].size()) + " and points[" +
+            std::to_string(i) + "] with " + std::to_string(points[i].size()));
+  };
   m.def("count_distinct",
-        [](const std::vector<std::vector<double>>& points, double tol) {
-          for (size_t i = 1; i < points.size(); ++i)
-            if (points[i].size() != points[0].size())
-              throw std::invalid_argument(
-                  "count_distinct: every point must have the same number of coordinates, got "
-                  "points[0] with " + std::to_string(points[0].size()) + " and points[" +
-                  std::to_string(i) + "] with " + std::to_string(points[i].size()));
+        [check_points](const std::vector<std::vector<double>>& points, double tol) {
+          check_points(points, "count_distinct");
           if (!(tol >= 0))
             throw std::invalid_argument("count_distinct: tol must be a distance >= 0, got " +
                                         number(tol));
@@ -758,13 +762,8 @@ PYBIND11_MODULE(_lash, m) {
         py::arg("non_harmonic_peaks") = -1, py::arg("min_end_time") = 0.0,
         py::arg("recurring") = -1, py::arg("contraction") = std::nan(""));
   m.def("section_contraction",
-        [](const std::vector<std::vector<double>>& points) {
-          for (size_t i = 1; i < points.size(); ++i)
-            if (points[i].size() != points[0].size())
-              throw std::invalid_argument(
-                  "section_contraction: every point must have the same number of coordinates, got "
-                  "points[0] with " + std::to_string(points[0].size()) + " and points[" +
-                  std::to_string(i) + "] with " + std::to_string(points[i].size()));
+        [check_points](const std::vector<std::vector<double>>& points) {
+          check_points(points, "section_contraction");
           return lash::section_contraction(points);
         },
         py::arg("points"));

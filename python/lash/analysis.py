@@ -2,14 +2,14 @@
 
 A run with its analyses (C++ `lash::analyze_run`, what `lash run --report` and `lash analyze`
 compute) — `analyze`, and `poincare`, `verdict`, `spectra` taking the parts of it — and the
-model-free functions of src/analysis one to one: `amplitude_spectrum`, `count_distinct`, `section_contraction`,
-`classify_motion`, `verdict_rule`, `contact_modes`, `decimate_min_max`.
+model-free functions of src/analysis one to one: `amplitude_spectrum`, `count_distinct`,
+`section_contraction`, `classify_motion`, `verdict_rule`, `contact_modes`, `decimate_min_max`.
 """
 from __future__ import annotations
 
 import math
 import re
-from typing import Any, Dict, Optional, Sequence, Tuple
+from typing import Any, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -223,15 +223,20 @@ def amplitude_spectrum(x, dt: float, window: str = "hann") -> Dict[str, Any]:
                                     _string("window", window, "\"hann\" or \"rectangular\""))
 
 
+def _points(points: Any) -> List[List[float]]:
+    """`points` (a sequence of points, each a sequence of numbers) as lists of floats; TypeError
+    naming the argument otherwise."""
+    if isinstance(points, (str, bytes)) or not hasattr(points, "__iter__"):
+        raise TypeError(f"points: expected a sequence of points (each a sequence of numbers), "
+                        f"got {_short(points)} ({type(points).__name__})")
+    return [_vector(f"points[{i}]", p).tolist() for i, p in enumerate(points)]
+
+
 def count_distinct(points, tol: float) -> int:
     """Number of distinct points (greedy clustering within Euclidean distance `tol`): a period-k
     orbit sampled stroboscopically gives k (C++ lash::count_distinct). Raises ValueError for
     points of different dimensions or tol < 0."""
-    if isinstance(points, (str, bytes)) or not hasattr(points, "__iter__"):
-        raise TypeError(f"points: expected a sequence of points (each a sequence of numbers), "
-                        f"got {_short(points)} ({type(points).__name__})")
-    rows = [_vector(f"points[{i}]", p).tolist() for i, p in enumerate(points)]
-    return _lash.count_distinct(rows, _real("tol", tol, "a distance"))
+    return _lash.count_distinct(_points(points), _real("tol", tol, "a distance"))
 
 
 def classify_motion(lyapunov: float, period: float, distinct: int, sections: int,
@@ -257,12 +262,9 @@ def section_contraction(points: Any) -> float:
     """How Poincare points' returns shrink: each point's distance to the nearest of the next 8,
     the median over the last third of the points that have 8 successors divided by the median
     over the first third (docs/analysis.md, the verdict rule). About 1 on a torus, below 1 where
-    the points close in on an orbit or rest; NaN with fewer than 12 points."""
-    if isinstance(points, (str, bytes)) or not hasattr(points, "__iter__"):
-        raise TypeError(f"points: expected a sequence of points (each a sequence of numbers), "
-                        f"got {_short(points)} ({type(points).__name__})")
-    rows = [_vector(f"points[{i}]", p).tolist() for i, p in enumerate(points)]
-    return _lash.section_contraction(rows)
+    the points close in on an orbit or rest; NaN with fewer than 12 points. Raises ValueError
+    for points of different dimensions."""
+    return _lash.section_contraction(_points(points))
 
 
 def verdict_rule() -> str:

@@ -9,6 +9,12 @@ namespace lash {
 
 namespace {
 
+double squared_distance(const std::vector<double>& a, const std::vector<double>& b) {
+  double d2 = 0;
+  for (size_t i = 0; i < a.size(); ++i) d2 += (a[i] - b[i]) * (a[i] - b[i]);
+  return d2;
+}
+
 /// Greedy clustering within `tol`: each point joins the first centre within tol, or becomes
 /// one. Returns the number of points of each centre, in the order the centres were found.
 std::vector<int> cluster_sizes(const std::vector<std::vector<double>>& points, double tol) {
@@ -17,10 +23,7 @@ std::vector<int> cluster_sizes(const std::vector<std::vector<double>>& points, d
   for (const auto& p : points) {
     size_t found = centres.size();
     for (size_t k = 0; k < centres.size() && found == centres.size(); ++k) {
-      const auto& c = *centres[k];
-      double d2 = 0;
-      for (size_t i = 0; i < p.size(); ++i) d2 += (p[i] - c[i]) * (p[i] - c[i]);
-      if (d2 <= tol * tol) found = k;
+      if (squared_distance(p, *centres[k]) <= tol * tol) found = k;
     }
     if (found == centres.size()) {
       centres.push_back(&p);
@@ -50,12 +53,8 @@ double section_contraction(const std::vector<std::vector<double>>& points) {
   std::vector<double> returns(n);
   for (int i = 0; i < n; ++i) {
     double best = std::numeric_limits<double>::infinity();
-    for (int j = i + 1; j <= i + kVerdictMaxPeriod; ++j) {
-      double d2 = 0;
-      for (size_t c = 0; c < points[i].size(); ++c)
-        d2 += (points[i][c] - points[j][c]) * (points[i][c] - points[j][c]);
-      best = std::min(best, d2);
-    }
+    for (int j = i + 1; j <= i + kVerdictMaxPeriod; ++j)
+      best = std::min(best, squared_distance(points[i], points[j]));
     returns[i] = std::sqrt(best);
   }
   const int third = n / 3;

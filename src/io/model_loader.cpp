@@ -1,7 +1,7 @@
 #include "io/model_loader.hpp"
-#include "io/number_format.hpp"
 
 #include "core/finalize.hpp"
+#include "io/number_format.hpp"
 
 #include <yaml-cpp/eventhandler.h>
 #include <yaml-cpp/yaml.h>
