@@ -486,7 +486,7 @@ void FixedPatternLdlt::solve(Eigen::VectorXd& x) const {
 }
 
 void prepare_constraint_solver(const Model& model, Workspace& ws, const Eigen::MatrixXd& phi_q,
-                               const JacobianPattern& pattern) {
+                               const JacobianPattern& pattern, bool chosen_again) {
   build_solver(model, ws, phi_q, pattern, false);
   // Safety net: a row pivot near 0 at assembly means an anchoring to an earlier body left a
   // leading block nearly singular; then every row goes after all of its bodies (safe whenever
@@ -525,7 +525,8 @@ void prepare_constraint_solver(const Model& model, Workspace& ws, const Eigen::M
   std::vector<double> floor(nq + ma, 0.0), near(nq + ma, 0.0);
   for (int a = 0; a < ma; ++a) s.pivot_reference.push_back(-s.ldlt.diagonal()[s.pos[nq + a]]);
   // Each row's largest pivot at the drawn configurations (Φ_q's values only; M and the pattern
-  // are the same there): a row far below it at assembly was assembled near a singular position.
+  // are the same there): a row far below it at assembly was assembled near a singular position;
+  // rows chosen again during the run take the larger of the two (kReferenceShare).
   if (!pattern.drawn.empty()) {
     std::vector<double> drawn_pivot(ma, 0.0);
     for (const Eigen::MatrixXd& drawn : pattern.drawn)
@@ -533,7 +534,7 @@ void prepare_constraint_solver(const Model& model, Workspace& ws, const Eigen::M
         for (int a = 0; a < ma; ++a)
           drawn_pivot[a] = std::max(drawn_pivot[a], -s.ldlt.diagonal()[s.pos[nq + a]]);
     for (int a = 0; a < ma; ++a)
-      if (s.pivot_reference[a] < kReferenceShare * drawn_pivot[a]) {
+      if (s.pivot_reference[a] < (chosen_again ? 1.0 : kReferenceShare) * drawn_pivot[a]) {
         s.provisional.push_back(a);
         s.pivot_reference[a] = drawn_pivot[a];
       }
@@ -684,7 +685,7 @@ bool reselect_redundant_rows(const Model& model, Workspace& ws) {
   pattern.keep = std::move(keep);
   const std::vector<std::string> warnings = ws.warnings;
   const double rank_reference = s.rank_reference;
-  prepare_constraint_solver(model, ws, ws.phi_q, pattern);
+  prepare_constraint_solver(model, ws, ws.phi_q, pattern, true);
   ws.solver->rank_reference = rank_reference;  // the assembly's, not this instant's
   ws.warnings = warnings;
   return true;

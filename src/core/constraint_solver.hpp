@@ -80,7 +80,15 @@ inline constexpr double kNearSingular = 1e-6;
 /// 70 267, exactly in line 19 570 in its first 1e-5 s; one continued from its in-line position
 /// 95 786 steps for 0.56 s. Bodies of very different mass make a pivot small at every
 /// configuration alike (3e-8 of W_aa for the 4.5 g pivot of erkaya_compliant_beam.yaml), not
-/// against the drawn ones.
+/// against the drawn ones. Rows chosen again during the run (reselect_redundant_rows) take the
+/// larger of their pivot there and the drawn one, whatever the share: a choice is made where
+/// the rows kept so far grew weak, often a few degrees from a singular position, where the new
+/// rows' pivots are a few percent of their size elsewhere. A redundant double parallelogram
+/// driven at 2000 rpm under BDF took its references there; its projection window and floor
+/// then lay so close to the in-line position that the coupler's angle drifted 2.5 times further
+/// at each in-line passage (1.8e-12 to 2.3e-9 rad) and the joints came apart within 0.16 s
+/// (up to 35 kJ booked as stabilization work); with the drawn references it runs 1 s at 2000 and 3000 rpm,
+/// rtol 1e-7 and 1e-9, the stabilization work below 1e-3 of the kinetic energy.
 inline constexpr double kReferenceShare = 1e-3;
 
 /// L D Lᵀ of a sparse symmetric matrix given by its upper triangle in elimination order, for
@@ -242,9 +250,11 @@ std::vector<bool> rows_to_keep_by_share(const Eigen::MatrixXd& phi_q, int count,
 /// `pattern.keep` leaves out (if empty, independent_rows of phi_q: the model's order, joints
 /// then drivers), warns about them in ws.warnings naming the joints they are redundant with, and
 /// computes the elimination order and the factorisation's pattern. Throws std::runtime_error if
-/// a driver's equation is redundant (its motion would be dropped).
+/// a driver's equation is redundant (its motion would be dropped). `chosen_again`: the rows
+/// were chosen again during the run (reselect_redundant_rows), and each row's pivot reference
+/// is at least its largest pivot at the drawn configurations (kReferenceShare).
 void prepare_constraint_solver(const Model& model, Workspace& ws, const Eigen::MatrixXd& phi_q,
-                               const JacobianPattern& pattern);
+                               const JacobianPattern& pattern, bool chosen_again = false);
 
 /// Solves the augmented system at the current ws.phi_q, ws.g (applied forces) and ws.rhs_m
 /// (γ_B): fills ws.qdd and ws.lambda (0 on dropped rows). Returns false if a value is not
