@@ -86,9 +86,9 @@ inline constexpr double kNearSingular = 1e-6;
 /// rows' pivots are a few percent of their size elsewhere. A redundant double parallelogram
 /// driven at 2000 rpm under BDF took its references there; its projection window and floor
 /// then lay so close to the in-line position that the coupler's angle drifted 2.5 times further
-/// at each in-line passage (1.8e-12 to 2.3e-9 rad) and the joints came apart within 0.16 s
-/// (up to 35 kJ booked as stabilization work); with the drawn references it runs 1 s at 2000 and 3000 rpm,
-/// rtol 1e-7 and 1e-9, the stabilization work below 1e-3 of the kinetic energy.
+/// at each in-line passage (1.8e-12 to 2.3e-9 rad) and the joints came apart within 0.25 s
+/// (29–38 kJ booked as stabilization work); with the drawn references it runs 1 s at 2000 and
+/// 3000 rpm, rtol 1e-7 and 1e-9, the stabilization work below 1e-3 of the kinetic energy.
 inline constexpr double kReferenceShare = 1e-3;
 
 /// L D Lᵀ of a sparse symmetric matrix given by its upper triangle in elimination order, for

@@ -602,10 +602,10 @@ class EnergyScale {
                   "energy, the work put in and dissipated), the most of it (%.3g J) between "
                   "outputs at t = %.6g and %.6g s: the joints were held by "
                   "Baumgarte's terms rather than by the motion, so the results there are not "
-                  "to be trusted (a singular position the run could not follow, or a start at "
-                  "one with velocities its joints cannot keep: pose the mechanism away from "
-                  "its in-line positions; a smaller rtol or integrator dopri5 may help; "
-                  "energy.stabilization has its history)",
+                  "to be trusted (a singular position the run could not follow, or a driver "
+                  "forcing the mechanism through a position where it locks; a smaller rtol or "
+                  "integrator dopri5 may help with the first; energy.stabilization has its "
+                  "history)",
                   stabilization_, 100.0 * stabilization_ / scale, scale, jump_, jump_from_,
                   jump_to_);
     return b;
