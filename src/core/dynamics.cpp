@@ -627,7 +627,9 @@ namespace {
 /// quadratic in a: Newton's method with minimum-norm steps from a = 0 and from ±s along each
 /// free direction (s the velocities' own size), the root of least kinetic energy kept. Nothing
 /// changes where Uᵀγ is already about 0 (away from singular positions, at rest), or when no
-/// root is found (the run's stabilization warning then says what happened).
+/// root is found (the run's stabilization warning then says what happened). phi, phi_q and
+/// phi_dot are the caller's buffers (their rows: the joints', drivers' and with close_clearance
+/// the clearance joints' closures); ws.kin is left at a trial state.
 void velocities_on_a_branch(const Model& model, Workspace& ws, bool close_clearance,
                             Eigen::VectorXd& y, Eigen::VectorXd& phi, Eigen::MatrixXd& phi_q,
                             Eigen::VectorXd& phi_dot) {
@@ -654,10 +656,7 @@ void velocities_on_a_branch(const Model& model, Workspace& ws, bool close_cleara
     return Eigen::VectorXd(left.transpose() * gamma);
   };
   const double tolerance = 1e-10 * scale;
-  if (residual(Eigen::VectorXd::Zero(nq - rank)).norm() <= 1e3 * tolerance) {
-    y.segment(nq, nq) = v0;
-    return;
-  }
+  if (residual(Eigen::VectorXd::Zero(nq - rank)).norm() <= 1e3 * tolerance) return;  // y as given
   const double s = std::max((chol.matrixU() * v0).norm(), 1e-300);
   std::vector<Eigen::VectorXd> starts{Eigen::VectorXd::Zero(nq - rank)};
   for (int i = 0; i < nq - rank; ++i)
@@ -677,10 +676,7 @@ void velocities_on_a_branch(const Model& model, Workspace& ws, bool close_cleara
     }
     if (f.norm() <= tolerance && (best.size() == 0 || a.norm() < best.norm())) best = a;
   }
-  if (best.size() > 0) residual(best);
-  else y.segment(nq, nq) = v0;
-  update_kin(ws, y.data());
-  build_constraints(model, ws, 0.0, y.data(), close_clearance, phi, phi_q, &phi_dot, nullptr);
+  y.segment(nq, nq) = best.size() > 0 ? Eigen::VectorXd(v0 + free * best) : v0;
 }
 
 }  // namespace
