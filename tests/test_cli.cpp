@@ -560,8 +560,14 @@ TEST(Cli, AFailureWithoutClearanceJointsStillGivesTheState) {
   // The load comes first: it, not a contact, is the likely cause (it was not named).
   EXPECT_NE(r.out.find("; state: load 'push' (the largest): force ("), std::string::npos) << r.out;
   EXPECT_NE(r.out.find(" N·m; body 'block' (the largest acceleration): position ("), std::string::npos) << r.out;
-  const std::string message = read_summary(dir / "out")["status"]["message"];
+  const auto status = read_summary(dir / "out")["status"];
+  const std::string message = status["message"];
   EXPECT_NE(message.find("m/s^2"), std::string::npos) << message;
+  // The element at fault: the load on the body whose velocity carried the step's largest error
+  // (summary.json's status.element was empty on every integrator failure).
+  EXPECT_EQ(status["element"], "push");
+  EXPECT_NE(message.find("the last step's largest error was in block.vx"), std::string::npos)
+      << message;
   fs::remove_all(dir);
 }
 
@@ -583,6 +589,7 @@ TEST(Cli, ARunStalledByPlainCoulombFrictionSaysSo) {
   EXPECT_EQ(r.code, 1) << r.out;
   EXPECT_NE(r.out.find("(plain Coulomb friction is discontinuous at zero slip"), std::string::npos)
       << r.out;
+  EXPECT_EQ(read_summary(dir / "out")["status"]["element"], "cj");
   const Result smooth = run_lash("run " + (dir / "m.yaml").string() + " -q -o " +
                                  (dir / "smooth").string() +
                                  " --set 'joints.cj.friction={law: ambrosio, mu: 0.1, v0: 1e-4, v1: 1e-3}'");
@@ -604,6 +611,7 @@ TEST(Cli, ARunStalledByPlainCoulombFrictionSaysSo) {
   EXPECT_EQ(stick.code, 1) << stick.out;
   EXPECT_NE(stick.out.find("(plain Coulomb friction is discontinuous at zero slip"), std::string::npos)
       << stick.out;
+  EXPECT_EQ(read_summary(dir / "stick")["status"]["element"], "cj");
   fs::remove_all(dir);
 }
 
@@ -611,10 +619,11 @@ TEST(Cli, BdfFailsWhereTheRightHandSideBlowsUpInsteadOfCreeping) {
   // A load that diverges at 1 ms, and a contact stiffness of 1e300: DOPRI5 stops at once with
   // a step-size underflow; BDF crept on for its whole max_steps per output (9 million steps in
   // two minutes before a time-out). It now stops at its smallest step, 16 ε·|t|.
-  const std::vector<std::string> cases = {
-      " --set solver.end_time=0.004 --set 'loads={f: {type: force, point: slider, fx: \"1/(0.001 - t)\"}}'",
-      " --set solver.end_time=0.002 --set joints.rod_slider.stiffness=1e300"};
-  for (const auto& extra : cases) {
+  // Each names the element at fault: the diverging load, the contact.
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {" --set solver.end_time=0.004 --set 'loads={f: {type: force, point: slider, fx: \"1/(0.001 - t)\"}}'", "f"},
+      {" --set solver.end_time=0.002 --set joints.rod_slider.stiffness=1e300", "rod_slider"}};
+  for (const auto& [extra, element] : cases) {
     SCOPED_TRACE(extra);
     const fs::path dir = temp_dir("bdf_blowup");
     const Result r = run_lash("run " + example() + " -q -o " + dir.string() +
@@ -625,6 +634,7 @@ TEST(Cli, BdfFailsWhereTheRightHandSideBlowsUpInsteadOfCreeping) {
     const auto j = read_summary(dir);
     EXPECT_EQ(j["status"]["outcome"], "failed");
     EXPECT_LT(j["integrator"]["steps"].get<long>(), 100000);
+    EXPECT_EQ(j["status"]["element"], element);
     fs::remove_all(dir);
   }
 }

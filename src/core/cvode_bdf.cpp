@@ -149,14 +149,33 @@ class CvodeBdf final : public Integrator {
         return {Advance::failure, failed_at_, msg};
       }
       return {Advance::failure, t_cur,
-              flag_name(flag) +
-                  (last_error_.empty() ? "" : ": " + last_error_)};
+              flag_name(flag) + (last_error_.empty() ? "" : ": " + last_error_), -1,
+              worst_component()};
     }
     t_ = t_ret;
     return {Advance::reached, t_ret, {}};
   }
 
   IntegratorStats stats() const override { return current(); }
+
+  /// The component with the largest weighted local error estimate of CVODE's last step
+  /// (CVodeGetEstLocalErrors times CVodeGetErrWeights; a NaN one first), −1 if not available.
+  int worst_component() {
+    N_Vector w = N_VNew_Serial(p_.n, ctx_), e = N_VNew_Serial(p_.n, ctx_);
+    int worst = -1;
+    if (w && e && CVodeGetErrWeights(mem_, w) == CV_SUCCESS &&
+        CVodeGetEstLocalErrors(mem_, e) == CV_SUCCESS) {
+      double most = -1.0;
+      for (int i = 0; i < (p_.n_diagnosed > 0 ? p_.n_diagnosed : p_.n); ++i) {
+        const double x = std::abs(NV_Ith_S(e, i) * NV_Ith_S(w, i));
+        if (!(x <= most)) most = x, worst = i;
+      }
+      if (most == 0.0) worst = -1;  // no estimate (a failure before any step)
+    }
+    if (w) N_VDestroy(w);
+    if (e) N_VDestroy(e);
+    return worst;
+  }
 
  private:
   /// one_step_to's return when the stop flag was raised (CVODE's own flags are 0..99 or < 0).

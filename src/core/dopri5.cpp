@@ -82,7 +82,8 @@ class Dopri5 final : public Integrator {
         return {Advance::stopped, t_, {}};
       }
       t_out_ = t_out;
-      if (auto fail = step(); !fail.empty()) return {Advance::failure, t_, fail};
+      if (auto fail = step(); !fail.empty())
+        return {Advance::failure, t_, fail, -1, worst_component_};
     }
   }
 
@@ -92,13 +93,18 @@ class Dopri5 final : public Integrator {
     return p_.rhs(t, y.data(), dy.data()) && dy.allFinite();
   }
 
+  /// The weighted RMS norm; `worst` (if given) receives the component with the largest weighted
+  /// error (a NaN one first), which a failure names.
   double error_norm(const Eigen::VectorXd& err, const Eigen::VectorXd& y0,
-                    const Eigen::VectorXd& y1) const {
-    double sum = 0.0;
+                    const Eigen::VectorXd& y1, int* worst = nullptr) const {
+    double sum = 0.0, most = -1.0;
     for (int i = 0; i < p_.n; ++i) {
       const double sc = o_.atol + o_.rtol * std::max(std::abs(y0[i]), std::abs(y1[i]));
-      sum += (err[i] / sc) * (err[i] / sc);
+      const double e = (err[i] / sc) * (err[i] / sc);
+      sum += e;
+      if (worst && i < diagnosed_ && !(e <= most)) most = e, *worst = i;
     }
+    if (worst && most == 0.0) *worst = -1;
     return std::sqrt(sum / p_.n);
   }
 
@@ -121,8 +127,10 @@ class Dopri5 final : public Integrator {
   /// One accepted step (with retries). Returns "" or a failure message.
   std::string step() {
     if (need_k1_) {
-      if (!f(t_, y_, k1_))
+      if (!f(t_, y_, k1_)) {
+        worst_component_ = -1;
         return "the right-hand side is not finite or the constraints are singular";
+      }
       need_k1_ = false;
       if (h_ <= 0.0) h_ = o_.first_step > 0 ? o_.first_step : initial_step();
     }
@@ -141,12 +149,13 @@ class Dopri5 final : public Integrator {
       const bool ok = stages(y_, k1_, t_, h);
       if (!ok) {  // a stage left the domain: shrink hard and retry
         ++stats_.rejected_steps;
+        worst_component_ = -1;  // not known: the right-hand side failed
         h_ = 0.25 * h;
         rejected_last = true;
         continue;
       }
       yt_ = h * (e1 * k1_ + e3 * k3_ + e4 * k4_ + e5 * k5_ + e6 * k6_ + e7 * k7_);
-      const double err = error_norm(yt_, y_, ynew_);
+      const double err = error_norm(yt_, y_, ynew_, &worst_component_);
       double fac = err > 0 ? 0.9 * std::pow(err, -0.2) : 5.0;
       if (err > 1.0 || !std::isfinite(err)) {
         ++stats_.rejected_steps;
@@ -333,6 +342,8 @@ class Dopri5 final : public Integrator {
   double t_out_ = 0.0;  ///< the time the running advance() goes to
   double t_ = 0.0, t_old_ = 0.0, h_ = 0.0, h_step_ = 0.0, t_event_ = 0.0;
   int event_k_ = -1;  ///< the event function of the pending event
+  int worst_component_ = -1;  ///< the largest weighted error of the last step tried (Advance)
+  int diagnosed_ = p_.n_diagnosed > 0 ? p_.n_diagnosed : p_.n;  ///< OdeProblem::n_diagnosed
   bool have_step_ = false, need_k1_ = true, pending_event_ = false, end_evaluated_ = false;
   Eigen::VectorXd y_, k1_prev_, k1_, k2_, k3_, k4_, k5_, k6_, k7_, yt_, ynew_, r1_, r2_, r3_, r4_, r5_, ye_;
   Eigen::VectorXd g_old_, g_new_, g_tmp_;

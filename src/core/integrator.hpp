@@ -16,6 +16,10 @@ namespace lash {
 struct OdeProblem {
   int n = 0;
   int n_events = 0;
+  /// The leading components a failure may name as the one with the largest error
+  /// (Advance::component); the others (integrals of powers, such as energy accounts) follow
+  /// from them. 0: all n.
+  int n_diagnosed = 0;
   /// Returns false if f cannot be evaluated (NaN, singular constraints).
   std::function<bool(double t, const double* y, double* ydot)> rhs;
   std::function<void(double t, const double* y, double* g)> events;
@@ -101,6 +105,9 @@ struct Advance {
   double t = 0.0;           ///< time reached (t_out, the located event, the failure or stop time)
   std::string message;      ///< failure reason
   int index = -1;           ///< event: the event function that rose through zero (-1: unknown)
+  /// failure: the component of y with the largest weighted local error in the last step tried
+  /// (−1: unknown, e.g. a right-hand side that could not be evaluated)
+  int component = -1;
 };
 
 class Integrator {

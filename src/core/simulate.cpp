@@ -90,6 +90,62 @@ std::string describe_contacts(const Model& model, const Workspace& ws) {
   return s.str();
 }
 
+/// The element a failed integration names (RunStatus::element): where the step's largest
+/// weighted error lies (`component` of y, −1 if unknown). An auxiliary state names its element;
+/// a body's coordinate names the clearance joint or load with the largest force on that body
+/// (a contact too stiff for the step, a load that diverges), else the body. Otherwise the
+/// element describe_contacts puts first: the largest load, else the clearance joint with the
+/// largest force or, with none in contact, the one nearest its wall, else the body accelerated
+/// most. ws holds the evaluation at the failure.
+std::string fault_element(const Model& model, const Workspace& ws, int component) {
+  const int nq = ws.nq;
+  if (component >= 2 * nq && component < 2 * nq + ws.na) {
+    const std::string& a = ws.aux_names[component - 2 * nq];
+    return a.substr(0, a.find('.'));
+  }
+  int body = -2;  // none: every element counts
+  if (component >= 0 && component < 2 * nq)
+    for (int b = 0; b < ws.nb; ++b) {
+      const BodyBlock& bl = ws.blocks[b];
+      if (component % nq >= bl.offset && component % nq < bl.offset + bl.size) body = b;
+    }
+  // The largest force (a NaN one counts as infinite: it is what failed); zero names nothing.
+  std::string name;
+  double most = 0.0;
+  auto consider = [&](const std::string& n, double size) {
+    if (std::isnan(size)) size = std::numeric_limits<double>::infinity();
+    if (size > most) most = size, name = n;
+  };
+  for (size_t l = 0; l < ws.load_out.size() && l < model.loads.size(); ++l) {
+    const Load& load = model.loads[l];
+    const LoadOutput& o = ws.load_out[l];
+    if (body == -2 || load.a.body == body || load.b.body == body || load.body_a == body ||
+        load.body_b == body)
+      consider(load.name, std::max(std::hypot(o.force.x(), o.force.y()), std::abs(o.torque)));
+  }
+  if (body == -2 && !name.empty()) return name;  // describe_contacts: the largest load first
+  for (int k = 0; k < ws.nc; ++k) {
+    const Joint& j = model.joints[ws.clearance_joints[k]];
+    if (body == -2 || j.a.body == body || j.b.body == body)
+      consider(j.name, ws.clearance_out[k].f_n);
+  }
+  if (!name.empty()) return name;
+  if (body >= 0) return model.bodies[body].name;
+  // No force anywhere: the journal nearest its wall, else the body accelerated most.
+  double nearest = -std::numeric_limits<double>::infinity();
+  for (int k = 0; k < ws.nc; ++k)
+    if (!(ws.clearance_out[k].delta <= nearest))
+      nearest = ws.clearance_out[k].delta, name = model.joints[ws.clearance_joints[k]].name;
+  double largest = 0.0;
+  if (ws.nc == 0)
+    for (int b = 0; b < ws.nb; ++b) {
+      const int o = ws.blocks[b].offset;
+      const double a = std::hypot(ws.qdd[o], ws.qdd[o + 1]);
+      if (!(a <= largest)) largest = a, name = model.bodies[b].name;
+    }
+  return name;
+}
+
 /// The status of a run stopped by an expression failing mid-run: the load or driver it
 /// belongs to as the element, and named in the message.
 RunStatus expression_failure(const Model& model, const ExpressionError& e) {
@@ -233,6 +289,7 @@ Simulator::Simulator(const Model& model, Workspace& ws, std::vector<SectionPlane
   // (problem_events); the section planes are located on each step's dense output instead
   // (plane_crossings).
   problem.n_events = 2 * ws.nc;
+  problem.n_diagnosed = 2 * ws.nq + ws.na;  // not the energy accounts
   problem.rhs = [this](double t, const double* yy, double* dy) {
     return evaluate(model_, ws_, t, yy, dy);
   };
@@ -344,9 +401,13 @@ bool Simulator::advance_to(double t_target, Observer* observer) try {
       // final_state.json and the message describe a consistent state; the status names the
       // time of the failure.
       evaluate(model_, ws_, t_, y_.data(), ydot_.data());
-      status_ = {false, adv.t, "",
+      std::string where;
+      if (adv.component >= 0 && adv.component < ws_.ny)
+        where = "; the last step's largest error was in " +
+                state_names(model_, ws_)[adv.component];
+      status_ = {false, adv.t, fault_element(model_, ws_, adv.component),
                  std::string("integrator ") + integrator_->name() + " failed: " + adv.message +
-                     "; state: " + describe_contacts(model_, ws_)};
+                     where + "; state: " + describe_contacts(model_, ws_)};
       return false;
     }
     t_ = adv.t;
