@@ -670,6 +670,46 @@ TEST(Singular, ADrivenParallelogramAssembledInLineStartsOnABranch) {
   }
 }
 
+TEST(Singular, ARedundantParallelogramAssembledInLineDropsItsRedundantRowAndRuns) {
+  // Three parallel cranks posed exactly in line and driven at 2000 rpm: there Φ_q lacks two
+  // ranks (the redundancy and the singular position), and at the configurations probed nearby
+  // (random moves in the joints' null space, Newton back onto the joints) the minimum-norm steps
+  // went back to the in-line position, so no row was dropped: under BDF the run stalled at its
+  // second in-line position (0.03 s; stopped by the stall test after 45 s of wall time). Now
+  // the probes also move along the driver and keep their length along the move, the redundant
+  // row is chosen where the mechanism is redundant only, and the warning names what it is
+  // redundant with there (the same joints as for the linkage posed 1e-3 rad off line).
+  const std::string text =
+      parallelogram_yaml(3, 1.0, 0.0) + "drivers: {motor: {joint: pivot_0, speed_rpm: 2000}}\n";
+  const double w = 2000 * 2 * M_PI / 60, kinetic = 0.5 * (3.0 / 3.0 + 2.0) * w * w;  // 65 797 J
+  const std::vector<std::vector<std::string>> cases = {
+      {"solver.integrator=bdf", "solver.rtol=1e-7", "solver.atol=1e-10"},
+      {"solver.integrator=bdf", "solver.rtol=1e-9", "solver.atol=1e-12", "solver.output_interval=1e-3"},
+      {"solver.integrator=dopri5", "solver.rtol=1e-7", "solver.atol=1e-10"}};
+  for (std::vector<std::string> overrides : cases) {
+    SCOPED_TRACE(overrides[0] + " " + overrides[1]);
+    overrides.push_back("solver.end_time=0.5");
+    const SimRun r = run_text(text, overrides);
+    ASSERT_TRUE(r.result.status.ok) << r.result.status.message;
+    ASSERT_EQ(r.result.warnings.size(), 1u);  // the redundancy; no stabilization warning
+    EXPECT_NE(r.result.warnings[0].find("joint 'coupler_2': 1 of its 2 equations is redundant with "
+                                        "joint 'pivot_0', joint 'coupler_0'"),
+              std::string::npos)
+        << r.result.warnings[0];
+    double coupler = 0, stabilization = 0, lo = 1e300, hi = 0;
+    for (size_t i = 0; i < r.rec->time.size(); ++i) {
+      coupler = std::max(coupler, std::abs((*r.rec)["coupler.phi"][i]));
+      stabilization = std::max(stabilization, std::abs((*r.rec)["energy.stabilization"][i]));
+      lo = std::min(lo, (*r.rec)["energy.kinetic"][i]);
+      hi = std::max(hi, (*r.rec)["energy.kinetic"][i]);
+    }
+    EXPECT_LT(coupler, 1e-6);  // the parallelogram branch throughout
+    EXPECT_NEAR(lo, kinetic, 50.0);
+    EXPECT_LT(hi - lo, 50.0);
+    EXPECT_LT(stabilization, 1e-3 * hi);
+  }
+}
+
 TEST(Singular, ARunWhoseJointsTheStabilizationHeldIsWarnedOf) {
   // A four-bar whose crank cannot turn a full revolution (ground 1, crank 0.6, coupler 0.5,
   // rocker 0.6 m), driven at 60 rpm: at its dead position the driver forces a locked mechanism,

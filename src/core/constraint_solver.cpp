@@ -134,8 +134,9 @@ static void build_solver(const Model& model, Workspace& ws, const Eigen::MatrixX
   ws.warnings.clear();
   if (static_cast<int>(s->active.size()) < m) {
     // Which kept rows span each dropped one: the least-squares combination of the kept rows.
+    const Eigen::MatrixXd& at = pattern.counted.size() > 0 ? pattern.counted : phi_q;
     Eigen::MatrixXd kept(nq, s->active.size());
-    for (size_t a = 0; a < s->active.size(); ++a) kept.col(a) = phi_q.row(s->active[a]).transpose();
+    for (size_t a = 0; a < s->active.size(); ++a) kept.col(a) = at.row(s->active[a]).transpose();
     const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(kept);
     for (int i = 0; i < m;) {
       // All rows of one element together.
@@ -147,7 +148,7 @@ static void build_solver(const Model& model, Workspace& ws, const Eigen::MatrixX
       for (int r = i; r < end; ++r) {
         if (keep[r]) continue;
         ++dropped;
-        const Eigen::VectorXd c = qr.solve(Eigen::VectorXd(phi_q.row(r).transpose()));
+        const Eigen::VectorXd c = qr.solve(Eigen::VectorXd(at.row(r).transpose()));
         const double cmax = c.cwiseAbs().maxCoeff();
         for (size_t a = 0; a < s->active.size(); ++a)
           if (std::abs(c[a]) > 1e-9 * cmax) with[s->active[a]] = true;
@@ -683,6 +684,7 @@ bool reselect_redundant_rows(const Model& model, Workspace& ws) {
   }
   JacobianPattern pattern = s.pattern;
   pattern.keep = std::move(keep);
+  pattern.counted.resize(0, 0);  // the warning is the assembly's (kept below)
   const std::vector<std::string> warnings = ws.warnings;
   const double rank_reference = s.rank_reference;
   prepare_constraint_solver(model, ws, ws.phi_q, pattern, true);

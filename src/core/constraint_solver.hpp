@@ -179,6 +179,11 @@ struct JacobianPattern {
   /// reference of σ_(m−dropped)/σ_1 (kReselectRank), so that a mechanism assembled near a
   /// singular position does not take it there.
   double nearby_rank = 0.0;
+  /// Φ_q at the nearby configuration where the redundant rows were chosen, for an assembly at a
+  /// singular position of a redundant mechanism (empty: the assembled one). The warning names
+  /// the joints the dropped rows are redundant with there: at the singular position more
+  /// combinations span them.
+  Eigen::MatrixXd counted;
 };
 
 /// The sparse solver of one workspace: pattern, elimination order and factorisation.

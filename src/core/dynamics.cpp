@@ -94,18 +94,18 @@ JacobianPattern jacobian_pattern(const Model& model, Workspace& ws, double t, co
   }
   // Redundant rows. At a singular position (a parallelogram's links in line, a four-bar's
   // change point) Φ_q loses rank at that configuration only, so the rows are counted again at
-  // assembled configurations nearby, reached by a move along the null space of the joints' rows
-  // (the mechanism's motions with the drivers let go, the singular direction among them: a
-  // driven mechanism reaches a nearby configuration a moment later) and Newton's method back
-  // onto the joints: one move of 1e-3 and one of 3e-2 (a probe that lands on the singular
-  // position again, as Newton's minimum-norm steps may near a branch point, is outvoted). With
-  // as many redundant rows nearby as at assembly, the mechanism is redundant there: the rows
+  // assembled configurations nearby, reached by moves of 1e-3 and 3e-2 along the null space of
+  // the joints' rows (the mechanism's motions with the drivers let go, the singular direction
+  // among them: a driven mechanism reaches a nearby configuration a moment later), one random
+  // and one per driver along its coordinate, and Newton's method back onto the joints. With as
+  // many redundant rows nearby as at assembly, the mechanism is redundant there: the rows
   // dropped are chosen by their share of the redundancy (rows_to_keep_by_share: the model's
   // order unless that leaves the rows kept nearly dependent, a crank along a world axis).
-  // With fewer, the assembly is at a singular position: a row is dropped only if it is
-  // redundant at every configuration, and one kept that way is carried by the regularised
-  // factorisation through the singular instant (constraint_solver.hpp). A redundant driver is
-  // left dropped (build_solver refuses it).
+  // With fewer, the assembly is at a singular position: the fewest found nearby are the
+  // mechanism's redundancy, chosen at the probe furthest from a singular position with that
+  // count (a probe may land near the singular position again), and the rank the singular
+  // position loses besides is carried by the regularised factorisation through the instant
+  // (constraint_solver.hpp). A redundant driver is left dropped (build_solver refuses it).
   pattern.keep = independent_rows(phi_q);
   const int redundant = static_cast<int>(std::count(pattern.keep.begin(), pattern.keep.end(), false));
   bool driver_dropped = false;
@@ -120,17 +120,46 @@ JacobianPattern jacobian_pattern(const Model& model, Workspace& ws, double t, co
     Eigen::MatrixXd joint_rows = phi_q;
     joints_only(joint_rows, nullptr);
     const Eigen::MatrixXd null = Eigen::FullPivLU<Eigen::MatrixXd>(joint_rows).kernel();
-    std::vector<bool> keep_any = pattern.keep;  // rows kept at assembly or at some probe
     std::vector<Eigen::MatrixXd> nearby;        // Φ_q at the probes
     int redundant_nearby = redundant;
-    for (const double move : {1e-3, 3e-2}) {
+    std::vector<int> counts;                    // redundant rows at each probe
+    // Besides a random move, per driver the move in that null space along which its coordinate
+    // changes most (the way the drivers take the mechanism: at a singular assembly a random
+    // move has a part along the flex, which is no motion).
+    Eigen::MatrixXd along_drivers(ws.nq, 0);
+    if (null.cols() > 0) {
+      const Eigen::MatrixXd basis =
+          Eigen::HouseholderQR<Eigen::MatrixXd>(null).householderQ() *
+          Eigen::MatrixXd::Identity(ws.nq, null.cols());
+      for (int r : ws.row_of_driver) {
+        const Eigen::VectorXd d = basis * (basis.transpose() * phi_q.row(r).transpose());
+        if (d.norm() > 0.0) {
+          along_drivers.conservativeResize(Eigen::NoChange, along_drivers.cols() + 1);
+          along_drivers.rightCols(1) = d;
+        }
+      }
+    }
+    for (int p = 0; p < 2 * (1 + along_drivers.cols()); ++p) {
+      const double move = p < 1 + along_drivers.cols() ? 1e-3 : 3e-2;
+      const int which = p % (1 + static_cast<int>(along_drivers.cols()));
       if (!(null.cols() > 0 && null.norm() > 0.0)) break;
-      Eigen::VectorXd r(null.cols());
-      for (int k = 0; k < r.size(); ++k) r[k] = unit(draw);
-      const Eigen::VectorXd d = null * r;
+      Eigen::VectorXd d;
+      if (which == 0) {
+        Eigen::VectorXd r(null.cols());
+        for (int k = 0; k < r.size(); ++k) r[k] = unit(draw);
+        d = null * r;
+      } else {
+        d = along_drivers.col(which - 1);
+      }
       if (!(d.norm() > 0.0)) continue;
+      const Eigen::VectorXd u = d / d.norm();
       probe = Eigen::Map<const Eigen::VectorXd>(y, ws.ny);
-      probe.head(ws.nq) += move * d / d.norm();
+      probe.head(ws.nq) += move * u;
+      // Newton's steps orthogonal to the move (its length along u is kept): unconstrained
+      // minimum-norm steps from a move with a part along a singular position's flex (a motion
+      // to first order only) went back to that position (a double parallelogram assembled in
+      // line: σ ratio 1.5e-7 at the probes), and the rows were chosen there.
+      const Eigen::MatrixXd across = Eigen::MatrixXd::Identity(ws.nq, ws.nq) - u * u.transpose();
       double residual = 1.0;
       for (int it = 0; it < 50 && !(residual < 1e-12); ++it) {
         update_kin(ws, probe.data());
@@ -139,18 +168,32 @@ JacobianPattern jacobian_pattern(const Model& model, Workspace& ws, double t, co
         joints_only(a, &phi);
         residual = phi.cwiseAbs().maxCoeff();
         if (!(residual < 1e-12))
-          probe.head(ws.nq) -= Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd>(a).solve(phi);
+          probe.head(ws.nq) -=
+              across * Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd>(a * across).solve(phi);
       }
       if (!(residual < 1e-12)) continue;  // pq is Φ_q at the converged probe (no step after)
       nearby.push_back(pq);
       const std::vector<bool> near = independent_rows(pq);
-      redundant_nearby = std::min(
-          redundant_nearby, static_cast<int>(std::count(near.begin(), near.end(), false)));
-      for (int i = 0; i < ws.m; ++i) keep_any[i] = keep_any[i] || near[i];
+      const int count = static_cast<int>(std::count(near.begin(), near.end(), false));
+      counts.push_back(count);
+      redundant_nearby = std::min(redundant_nearby, count);
     }
-    pattern.keep = redundant_nearby == redundant
-                       ? rows_to_keep_by_share(phi_q, redundant, ws.row_of_driver)
-                       : keep_any;
+    if (redundant_nearby == redundant) {
+      pattern.keep = rows_to_keep_by_share(phi_q, redundant, ws.row_of_driver);
+    } else if (redundant_nearby > 0) {
+      // Chosen at the probe furthest from a singular position among those with the fewest.
+      int fewest = -1;
+      double best = -1.0;
+      for (size_t p = 0; p < nearby.size(); ++p) {
+        if (counts[p] != redundant_nearby) continue;
+        const double ratio = rank_ratio(nearby[p], ws.m - redundant_nearby);
+        if (!(ratio <= best)) best = ratio, fewest = static_cast<int>(p);
+      }
+      pattern.counted = nearby[fewest];
+      pattern.keep = rows_to_keep_by_share(pattern.counted, redundant_nearby, ws.row_of_driver);
+    } else {
+      pattern.keep.assign(ws.m, true);  // a singular position of a mechanism not redundant
+    }
     const int kept = static_cast<int>(std::count(pattern.keep.begin(), pattern.keep.end(), true));
     for (const Eigen::MatrixXd& near : nearby)
       pattern.nearby_rank = std::max(pattern.nearby_rank, rank_ratio(near, kept));
