@@ -110,7 +110,7 @@ JacobianPattern jacobian_pattern(const Model& model, Workspace& ws, double t, co
   const int redundant = static_cast<int>(std::count(pattern.keep.begin(), pattern.keep.end(), false));
   bool driver_dropped = false;
   for (int r : ws.row_of_driver) driver_dropped = driver_dropped || !pattern.keep[r];
-  if (redundant > 0 && !driver_dropped) {
+  if (redundant > 0) {
     auto joints_only = [&](Eigen::MatrixXd& a, Eigen::VectorXd* v) {
       for (int r : ws.row_of_driver) {
         a.row(r).setZero();
@@ -119,10 +119,16 @@ JacobianPattern jacobian_pattern(const Model& model, Workspace& ws, double t, co
     };
     Eigen::MatrixXd joint_rows = phi_q;
     joints_only(joint_rows, nullptr);
-    const Eigen::MatrixXd null = Eigen::FullPivLU<Eigen::MatrixXd>(joint_rows).kernel();
+    // The joints' null space at the redundancy test's tolerance: a state continued from a run
+    // holds its joints to the drift (1e-12), so the rows of a redundant set are dependent to that
+    // only, and LU's default threshold (round-off) found no null space to probe along.
+    Eigen::FullPivLU<Eigen::MatrixXd> lu(joint_rows);
+    lu.setThreshold(kRedundancyTolerance);
+    const Eigen::MatrixXd null = lu.kernel();
     std::vector<Eigen::MatrixXd> nearby;        // Φ_q at the probes
     int redundant_nearby = redundant;
     std::vector<int> counts;                    // redundant rows at each probe
+    bool driver_kept_nearby = false;            // at some probe every driver's row is independent
     // Besides a random move, per driver the move in that null space along which its coordinate
     // changes most (the way the drivers take the mechanism: at a singular assembly a random
     // move has a part along the flex, which is no motion).
@@ -177,8 +183,16 @@ JacobianPattern jacobian_pattern(const Model& model, Workspace& ws, double t, co
       const int count = static_cast<int>(std::count(near.begin(), near.end(), false));
       counts.push_back(count);
       redundant_nearby = std::min(redundant_nearby, count);
+      bool drivers_kept = true;
+      for (int r : ws.row_of_driver) drivers_kept = drivers_kept && near[r];
+      driver_kept_nearby = driver_kept_nearby || drivers_kept;
     }
-    if (redundant_nearby == redundant) {
+    if (driver_dropped && !driver_kept_nearby) {
+      // A driver redundant nearby as well: its motion is fixed by the joints (build_solver
+      // refuses it). Redundant only at assembly, it is a singular position (a state continued
+      // 2e-7 rad from a double parallelogram's in-line position: the joints' rows, one nearly
+      // dependent, were all kept in order and the driver's counted redundant).
+    } else if (redundant_nearby == redundant) {
       pattern.keep = rows_to_keep_by_share(phi_q, redundant, ws.row_of_driver);
     } else if (redundant_nearby > 0) {
       // Chosen at the probe furthest from a singular position among those with the fewest.
