@@ -689,6 +689,7 @@ bool reselect_redundant_rows(const Model& model, Workspace& ws) {
   const double rank_reference = s.rank_reference;
   prepare_constraint_solver(model, ws, ws.phi_q, pattern, true);
   ws.solver->rank_reference = rank_reference;  // the assembly's, not this instant's
+  ws.solver->reselect_wait = kReselectWait;
   ws.warnings = warnings;
   return true;
 }

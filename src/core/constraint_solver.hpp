@@ -293,7 +293,11 @@ inline constexpr double kReselectPivot = 1e-2;
 inline constexpr double kReselectRank = 0.1;
 /// After a choice refused there, or one that comes out as the rows already dropped (the kept
 /// rows are weak by the mechanism's own position), the next this many evaluations do not try
-/// again (each try is an SVD of Φ_q: near a singular position every evaluation would make one).
+/// again (each try is an SVD of Φ_q: near a singular position every evaluation would make one);
+/// nor after a choice made: with several redundant rows the choices near a singular position
+/// are many and about as weak (a five-crank double parallelogram's x equations), and switching
+/// between them at every evaluation changed the right-hand side at every evaluation (BDF, rtol
+/// 1e-7, failed 12° before an in-line position with error test failures at h = 3e-14 s).
 inline constexpr int kReselectWait = 64;
 
 /// With redundant rows: whether a kept row's pivot in the last factorisation is below
