@@ -186,6 +186,12 @@ inline constexpr double kRunViolationLimit = 1e-3;
 /// four-bar whose crank cannot turn a full revolution, driven through its dead position, did
 /// 1e10 J on under 1 J of kinetic energy before it came apart.
 inline constexpr double kStabilizationWarning = 1e-2;
+/// Below this work (J), or this share of the largest kinetic plus |potential| energy at an
+/// output, the stabilization's work is round-off and no warning is given, whatever its share of
+/// the energy moved: a bar hanging at rest from a pin did 5.9e-13 J, 57 % of the nothing it
+/// moved (a mechanism at rest, or held at a dead centre by a force).
+inline constexpr double kStabilizationFloor = 1e-9;
+inline constexpr double kStabilizationFloorShare = 1e-9;
 
 /// Why y cannot be run at time t: a redundant driver or, with check_residual, constraint
 /// residuals beyond kStateTolerance*. "" when it can. Sets up ws's constraint solver at y
