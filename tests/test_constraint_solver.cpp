@@ -638,6 +638,22 @@ TEST(Singular, AParallelogramAssembledInLineKeepsEveryJointEquation) {
   EXPECT_LT(diff, 1e-3);
 }
 
+/// Over a driven parallelogram's outputs: the largest |coupler angle| (0 on its branch), the
+/// largest |stabilization work|, and the least and largest kinetic energy.
+struct ParallelogramExtent {
+  double coupler = 0, stabilization = 0, lo = 1e300, hi = 0;
+};
+ParallelogramExtent parallelogram_extent(const Recorder& rec) {
+  ParallelogramExtent e;
+  for (size_t i = 0; i < rec.time.size(); ++i) {
+    e.coupler = std::max(e.coupler, std::abs(rec["coupler.phi"][i]));
+    e.stabilization = std::max(e.stabilization, std::abs(rec["energy.stabilization"][i]));
+    e.lo = std::min(e.lo, rec["energy.kinetic"][i]);
+    e.hi = std::max(e.hi, rec["energy.kinetic"][i]);
+  }
+  return e;
+}
+
 TEST(Singular, ADrivenParallelogramAssembledInLineStartsOnABranch) {
   // Assembled exactly in line and driven at 2000 rpm: the drivers leave the coupler's rate
   // undetermined there, and the least-kinetic-energy velocities (29 200 J) lie on no branch of
@@ -654,13 +670,7 @@ TEST(Singular, ADrivenParallelogramAssembledInLineStartsOnABranch) {
                                      std::string("solver.integrator=") + integrator});
     ASSERT_TRUE(r.result.status.ok) << r.result.status.message;
     EXPECT_TRUE(r.result.warnings.empty()) << r.result.warnings[0];
-    double coupler = 0, stabilization = 0, lo = 1e300, hi = 0;
-    for (size_t i = 0; i < r.rec->time.size(); ++i) {
-      coupler = std::max(coupler, std::abs((*r.rec)["coupler.phi"][i]));
-      stabilization = std::max(stabilization, std::abs((*r.rec)["energy.stabilization"][i]));
-      lo = std::min(lo, (*r.rec)["energy.kinetic"][i]);
-      hi = std::max(hi, (*r.rec)["energy.kinetic"][i]);
-    }
+    const auto [coupler, stabilization, lo, hi] = parallelogram_extent(*r.rec);
     EXPECT_LT(coupler, 1e-6);  // the parallelogram branch
     // ½(2·(1/3) + 2)·ω² with ω = 2000 rpm, less the potential energy it trades (about 20 J).
     const double w = 2000 * 2 * M_PI / 60;
@@ -696,13 +706,7 @@ TEST(Singular, ARedundantParallelogramAssembledInLineDropsItsRedundantRowAndRuns
                                         "joint 'pivot_0', joint 'coupler_0'"),
               std::string::npos)
         << r.result.warnings[0];
-    double coupler = 0, stabilization = 0, lo = 1e300, hi = 0;
-    for (size_t i = 0; i < r.rec->time.size(); ++i) {
-      coupler = std::max(coupler, std::abs((*r.rec)["coupler.phi"][i]));
-      stabilization = std::max(stabilization, std::abs((*r.rec)["energy.stabilization"][i]));
-      lo = std::min(lo, (*r.rec)["energy.kinetic"][i]);
-      hi = std::max(hi, (*r.rec)["energy.kinetic"][i]);
-    }
+    const auto [coupler, stabilization, lo, hi] = parallelogram_extent(*r.rec);
     EXPECT_LT(coupler, 1e-6);  // the parallelogram branch throughout
     EXPECT_NEAR(lo, kinetic, 50.0);
     EXPECT_LT(hi - lo, 50.0);

@@ -145,10 +145,10 @@ JacobianPattern jacobian_pattern(const Model& model, Workspace& ws, double t, co
         }
       }
     }
-    for (int p = 0; p < 2 * (1 + along_drivers.cols()); ++p) {
-      const double move = p < 1 + along_drivers.cols() ? 1e-3 : 3e-2;
-      const int which = p % (1 + static_cast<int>(along_drivers.cols()));
-      if (!(null.cols() > 0 && null.norm() > 0.0)) break;
+    const int probes = null.cols() > 0 && null.norm() > 0.0 ? 2 * (1 + along_drivers.cols()) : 0;
+    for (int p = 0; p < probes; ++p) {
+      const double move = p < probes / 2 ? 1e-3 : 3e-2;
+      const int which = p % (probes / 2);
       Eigen::VectorXd d;
       if (which == 0) {
         Eigen::VectorXd r(null.cols());
