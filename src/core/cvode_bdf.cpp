@@ -72,7 +72,7 @@ class CvodeBdf final : public Integrator {
       a_ = check_ptr(SUNDenseMatrix(p_.n, p_.n, ctx_), "SUNDenseMatrix");
       ls_ = check_ptr(SUNLinSol_Dense(y_, a_, ctx_), "SUNLinSol_Dense");
       check(CVodeSetLinearSolver(mem_, ls_, a_), "CVodeSetLinearSolver");
-      if (p_.project) projected_.resize(p_.n);
+      if (p_.project || p_.halt) projected_.resize(p_.n);
       if (p_.n_events > 0) {
         check(CVodeRootInit(mem_, p_.n_events, root_cb), "CVodeRootInit");
         std::vector<int> dir(p_.n_events, 1);  // events are g rising through zero
@@ -111,7 +111,7 @@ class CvodeBdf final : public Integrator {
     // the runs that use BDF.
     CVodeSetMinStep(mem_, 16.0 * std::numeric_limits<double>::epsilon() * std::abs(t_));
     const int flag =
-        hook_ || stop_ || p_.project ? one_step_to(t_out, t_ret)
+        hook_ || stop_ || p_.project || p_.halt ? one_step_to(t_out, t_ret)
                                      : CVode(mem_, t_out, y_, &t_ret, CV_NORMAL);
     if (pending_) {  // the right-hand side threw (e.g. an ExpressionError): CVODE has stopped
       std::exception_ptr e = pending_;
@@ -258,6 +258,15 @@ class CvodeBdf final : public Integrator {
           check(CVodeReInit(mem_, t1, y_), "CVodeReInit");
           CVodeSetInitStep(mem_, h);
           restarted_ = true;
+        }
+      }
+      // Not at a step that passed t_out: the output there comes first, and is checked itself.
+      if (p_.halt && t1 < t_out) {
+        Eigen::VectorXd& p = projected_;
+        for (int i = 0; i < p_.n; ++i) p[i] = NV_Ith_S(y_, i);
+        if (p_.halt(t1, p)) {
+          t_ret = t1;
+          return kStopped;
         }
       }
     }

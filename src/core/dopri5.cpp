@@ -51,6 +51,7 @@ class Dopri5 final : public Integrator {
     y_ = y;
     have_step_ = false;
     pending_event_ = false;
+    halted_ = false;
     need_k1_ = true;
     if (p_.n_events > 0) p_.events(t_, y_.data(), g_old_.data());
   }
@@ -77,7 +78,7 @@ class Dopri5 final : public Integrator {
       if (pending_event_) {  // the caller must reset() at the event first
         return {Advance::failure, t_, "internal: advance past an unhandled event"};
       }
-      if (stop_requested()) {
+      if (halted_ || stop_requested()) {
         y = y_;
         return {Advance::stopped, t_, {}};
       }
@@ -183,6 +184,10 @@ class Dopri5 final : public Integrator {
         need_k1_ = true;  // the next step starts from the moved state
         end_evaluated_ = false;
         if (p_.n_events > 0) p_.events(t_, y_.data(), g_old_.data());
+      }
+      if (!pending_event_ && p_.halt && p_.halt(t_, y_)) {
+        halted_ = true;
+        return "";
       }
       // max_steps counts the whole run: the goal is its end where it is known.
       return stall_.after_step(t_old_, t_, std::max(t_out_, o_.end_time),
@@ -345,6 +350,7 @@ class Dopri5 final : public Integrator {
   int worst_component_ = -1;  ///< the largest weighted error of the last step tried (Advance)
   int diagnosed_ = p_.n_diagnosed > 0 ? p_.n_diagnosed : p_.n;  ///< OdeProblem::n_diagnosed
   bool have_step_ = false, need_k1_ = true, pending_event_ = false, end_evaluated_ = false;
+  bool halted_ = false;  ///< p_.halt stopped the run at the last step's end
   Eigen::VectorXd y_, k1_prev_, k1_, k2_, k3_, k4_, k5_, k6_, k7_, yt_, ynew_, r1_, r2_, r3_, r4_, r5_, ye_;
   Eigen::VectorXd g_old_, g_new_, g_tmp_;
   Eigen::VectorXd g_quarter_[3];  ///< the event functions at a step's quarter points

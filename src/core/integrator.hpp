@@ -26,6 +26,10 @@ struct OdeProblem {
   /// Optional, called at the end of every accepted step not cut at an event: may move y (for
   /// the constraints of a state near a singular position); returns true if it did.
   std::function<bool(double t, Eigen::VectorXd& y)> project;
+  /// Optional, called at the end of every accepted step not cut at an event (after `project`):
+  /// true stops the run there, as the stop flag does (advance() returns `stopped` with y at
+  /// that end), for a state the caller will not go on from (joints pulled apart).
+  std::function<bool(double t, const Eigen::VectorXd& y)> halt;
 };
 
 struct IntegratorOptions {

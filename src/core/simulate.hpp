@@ -162,6 +162,10 @@ class Simulator {
   bool near_singular_ = false;  ///< the last step ended near a singular position
   long projections_ = 0;        ///< states moved onto the constraints there
   long through_events_ = 0;     ///< located journals through their bearings (not contact events)
+  /// The largest constraint residual of the integrator's last right-hand side (at a DOPRI5
+  /// step's end, its state), and whether a step's end was found beyond kRunViolationLimit.
+  double rhs_violation_ = 0.0;
+  bool pulled_apart_ = false;
   /// The event functions of the integrated problem: the clearance joints' contact functions,
   /// then their through-the-bearing functions.
   void problem_events(const double* y, double* g) const;
