@@ -38,7 +38,8 @@ TEST(ChannelSelect, PatternMatchingNothingNamesTheClosest) {
     FAIL() << "no error";
   } catch (const std::invalid_argument& e) {
     EXPECT_STREQ(e.what(),
-                 "channel pattern 'slidr.v*' matches no channel; the closest are: slider.x, "
+                 "channel pattern 'slidr.v*' matches no channel (names are case-sensitive); the "
+                 "closest are: slider.x, "
                  "slider.vx, rod_slider.F");
   }
 }

@@ -1414,10 +1414,21 @@ TEST(Cli, ChannelsSelectTheColumnsTimeAlwaysKept) {
 
 TEST(Cli, ChannelPatternMatchingNothingIsAnErrorNamingTheClosest) {
   const fs::path dir = temp_dir("channels_bad");
-  Result r = run_lash("run " + example() + " -q -o " + dir.string() + " --channels 'slider.x,slidr.vx'");
+  Result r = run_lash("run " + example() + " -q -o " + dir.string() +
+                      " --channels 'slider.x,slidr.vx,TIME,Slider.AX'");
   EXPECT_EQ(r.code, 2) << r.out;
-  EXPECT_NE(r.out.find("--channels: channel pattern 'slidr.vx' matches no channel; the closest are: "
-                       "slider.vx"),
+  // Every pattern that matches nothing is named (only the first was), each with the closest
+  // names ranked with case ignored (TIME was told of other channels, not of time).
+  EXPECT_NE(r.out.find("--channels: channel pattern 'slidr.vx' matches no channel (names are "
+                       "case-sensitive); the closest are: slider.vx"),
+            std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find("; channel pattern 'TIME' matches no channel (names are case-sensitive); "
+                       "the closest are: time"),
+            std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find("; channel pattern 'Slider.AX' matches no channel (names are "
+                       "case-sensitive); the closest are: slider.ax"),
             std::string::npos)
       << r.out;
   EXPECT_FALSE(fs::exists(dir)) << "refused before the folder is touched";

@@ -3,6 +3,7 @@
 #include <fnmatch.h>
 
 #include <algorithm>
+#include <cctype>
 #include <stdexcept>
 
 #include "io/diagnostics.hpp"
@@ -50,6 +51,7 @@ std::vector<std::size_t> select_channels(const std::vector<ChannelInfo>& channel
     return picked;
   }
   std::vector<char> selected(channels.size(), 0);
+  std::string unmatched;  // every pattern that matches nothing, each with its closest names
   for (const auto& p : patterns) {
     if (!sets_closed(p))
       throw std::invalid_argument("channel pattern '" + p +
@@ -58,21 +60,31 @@ std::vector<std::size_t> select_channels(const std::vector<ChannelInfo>& channel
     for (std::size_t i = 0; i < channels.size(); ++i)
       if (fnmatch(p.c_str(), channels[i].name.c_str(), 0) == 0) selected[i] = 1, any = true;
     if (any) continue;
-    // The closest names by edit distance to the pattern without its wildcards.
+    // The closest names (time among them) by edit distance to the pattern without its
+    // wildcards, case ignored: 'TIME' is closest to time, 'Slider.X' to slider.x.
+    auto lower = [](std::string w) {
+      for (char& c : w) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+      return w;
+    };
     std::string bare;
     for (char c : p)
       if (c != '*' && c != '?' && c != '[' && c != ']') bare += c;
+    bare = lower(bare);
+    std::vector<std::string> names;
+    for (const auto& c : channels) names.push_back(c.name);
+    names.push_back("time");  // last: a tie goes to a channel
     std::vector<std::pair<int, std::size_t>> ranked;
-    for (std::size_t i = 0; i < channels.size(); ++i)
-      ranked.push_back({edit_distance(bare, channels[i].name), i});
+    for (std::size_t i = 0; i < names.size(); ++i)
+      ranked.push_back({edit_distance(bare, lower(names[i])), i});
     std::stable_sort(ranked.begin(), ranked.end(),
                      [](const auto& a, const auto& b) { return a.first < b.first; });
     std::string closest;
     for (std::size_t k = 0; k < std::min<std::size_t>(3, ranked.size()); ++k)
-      closest += (k ? ", " : "") + channels[ranked[k].second].name;
-    throw std::invalid_argument("channel pattern '" + p + "' matches no channel" +
-                                (closest.empty() ? std::string() : "; the closest are: " + closest));
+      closest += (k ? ", " : "") + names[ranked[k].second];
+    unmatched += (unmatched.empty() ? "" : "; ") + ("channel pattern '" + p +
+                 "' matches no channel (names are case-sensitive); the closest are: " + closest);
   }
+  if (!unmatched.empty()) throw std::invalid_argument(unmatched);
   for (std::size_t i = 0; i < channels.size(); ++i)
     if (selected[i]) picked.push_back(i);
   return picked;

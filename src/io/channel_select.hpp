@@ -29,9 +29,10 @@ std::vector<std::string> split_channel_patterns(const std::string& list);
 /// Indices into `channels` of the channels that match at least one pattern (shell globs as
 /// fnmatch(3): `*`, `?`, `[...]`; `*` also matches dots), in the channels' own order, each once.
 /// No patterns: every channel. A `[` that no `]` closes is an error (std::invalid_argument
-/// naming the pattern); so is a pattern that matches no channel:
-/// std::invalid_argument naming it and the closest channel names ("... matches no channel; the
-/// closest are: slider.x, slider.vx, slider.ax"); `time` alone is accepted and selects nothing.
+/// naming the pattern); so are patterns that match no channel: std::invalid_argument naming
+/// each and the closest names, case ignored ("... matches no channel (names are case-sensitive);
+/// the closest are: slider.x, slider.vx, slider.ax"); `time` alone is accepted and selects
+/// nothing.
 std::vector<std::size_t> select_channels(const std::vector<ChannelInfo>& channels,
                                          const std::vector<std::string>& patterns);
 
