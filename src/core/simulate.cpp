@@ -182,8 +182,9 @@ RunStatus pulled_apart(const Model& model, const Workspace& ws, double t) {
   s << e.what << ": pulled apart: its constraint residual is " << worst << " (m or rad) at t = "
     << t << " s, beyond the " << kRunViolationLimit
     << " a run allows: the mechanism cannot follow its joints and drivers here (a driver "
-       "forcing a locked or singular position, a loop that does not close, a step too large "
-       "for the constraint stabilization)";
+       "forcing a locked or singular position, a loop that does not close, or steps too "
+       "large for the constraint stabilization: a smaller solver.rtol than "
+    << model.solver.rtol << " may cure that)";
   return {false, t, e.element, s.str()};
 }
 
