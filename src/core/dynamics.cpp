@@ -714,7 +714,21 @@ void velocities_on_a_branch(const Model& model, Workspace& ws, bool close_cleara
   };
   const double tolerance = 1e-10 * scale;
   if (residual(Eigen::VectorXd::Zero(nq - rank)).norm() <= 1e3 * tolerance) return;  // y as given
-  const double s = std::max((chol.matrixU() * v0).norm(), 1e-300);
+  // The starts' size: the velocities' own, or from rest (F(a) = F(0) + Q(a), Q quadratic, no
+  // linear term to move Newton off a = 0) the size at which Q balances F(0), Q(±e_i) measured
+  // along each free direction (a slider-crank driven at its slider from rest at dead centre:
+  // the crank started at rest, and a push of 3.4e8 N started it).
+  double s = (chol.matrixU() * v0).norm();
+  if (!(s > 0.0)) {
+    const Eigen::VectorXd f0 = residual(Eigen::VectorXd::Zero(nq - rank));
+    double q = 0.0;
+    for (int i = 0; i < nq - rank; ++i) {
+      const Eigen::VectorXd e = Eigen::VectorXd::Unit(nq - rank, i);
+      q = std::max(q, 0.5 * (residual(e) + residual(-e) - 2.0 * f0).norm());
+    }
+    s = q > 0.0 ? std::sqrt(f0.norm() / q) : 0.0;
+  }
+  s = std::max(s, 1e-300);
   std::vector<Eigen::VectorXd> starts{Eigen::VectorXd::Zero(nq - rank)};
   for (int i = 0; i < nq - rank; ++i)
     for (double sign : {1.0, -1.0}) starts.push_back(sign * s * Eigen::VectorXd::Unit(nq - rank, i));
