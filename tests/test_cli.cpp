@@ -571,6 +571,32 @@ TEST(Cli, AFailureWithoutClearanceJointsStillGivesTheState) {
   fs::remove_all(dir);
 }
 
+TEST(Cli, AStateNotFiniteAtTheStartNamesItsLoadAndWritesNoNaN) {
+  // A load of 1e308·e^{100t} N makes the acceleration infinite at t = 0. The status named no
+  // element, the time series held a row of nan and inf that `lash report` then refused ("a run
+  // stops before it would write one"), and summary.json gave the acceleration's extrema as 0.
+  const fs::path dir = temp_dir("nan_start");
+  fs::create_directories(dir);
+  std::ofstream(dir / "m.yaml")
+      << "gravity: [0, -9.81]\nground: {markers: {O: [0, 0]}}\nbodies:\n"
+         "  arm: {mass: 1, inertia: 0.0833333, position: [0.5, 0], markers: {O: [-0.5, 0], A: [0.5, 0]}}\n"
+         "joints:\n  pin: {type: revolute, journal: arm.O, bearing: ground.O}\n"
+         "loads:\n  push: {type: force, point: arm.A, fy: \"1e308*exp(time*100)\"}\n"
+         "solver: {end_time: 0.1, output_interval: 0.01}\n";
+  const fs::path out = dir / "out";
+  const Result r = run_lash("run " + (dir / "m.yaml").string() + " -q -o " + out.string());
+  EXPECT_EQ(r.code, 1) << r.out;
+  EXPECT_NE(r.out.find("not finite (NaN/Inf); load 'push' (the largest)"), std::string::npos) << r.out;
+  const auto j = read_summary(out);
+  EXPECT_EQ(j["status"]["element"], "push");
+  EXPECT_EQ(line_count(out / "timeseries.csv"), 1u);  // the header only
+  EXPECT_TRUE(j["channels"]["arm.ay"]["max"].is_null()) << j["channels"]["arm.ay"];
+  EXPECT_TRUE(j["channels"]["arm.ay"]["peak"].is_null());
+  const Result rep = run_lash("report " + out.string());
+  EXPECT_EQ(rep.out.find("not a finite number"), std::string::npos) << rep.out;
+  fs::remove_all(dir);
+}
+
 TEST(Cli, ARunStalledByPlainCoulombFrictionSaysSo) {
   // A journal thrown head-on at its bearing (radial motion: the slip is round-off) with plain
   // Coulomb friction stalls at the first contact, where the frictionless run and the smooth laws

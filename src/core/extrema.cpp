@@ -53,8 +53,11 @@ void ChannelExtrema::sample(double t, const double* values) {
   if (t < from_ || t > to_) return;
   for (size_t i = 0; i < ext_.size(); ++i) {
     const double v = values[i];
-    if (!std::isfinite(v)) continue;
     ChannelExtremum& e = ext_[i];
+    if (!std::isfinite(v)) {
+      e.non_finite = true;
+      continue;
+    }
     if (!e.seen || v < e.min) e.min = v, e.t_min = t;
     if (!e.seen || v > e.max) e.max = v, e.t_max = t;
     e.seen = true;

@@ -16,7 +16,8 @@ namespace lash {
 /// A channel's smallest and largest value over a run and when they occurred.
 struct ChannelExtremum {
   double min = 0.0, t_min = 0.0, max = 0.0, t_max = 0.0;
-  bool seen = false;  ///< false until a first value arrived
+  bool seen = false;  ///< false until a first finite value arrived
+  bool non_finite = false;  ///< a value was NaN or ±inf (not counted in min and max)
 };
 
 /// Tracks the extrema of all channels (`channel_values`) of a run.

@@ -759,7 +759,8 @@ RunResult simulate(const Model& model, Workspace& ws, Observer& observer,
       return false;
     }
     if (!finite)
-      result.status = {false, t, "", "the state or its derivative is not finite (NaN/Inf); " +
+      result.status = {false, t, fault_element(model, ws, -1),
+                       "the state or its derivative is not finite (NaN/Inf); " +
                                          describe_contacts(model, ws)};
     return finite;
   };
@@ -770,10 +771,13 @@ RunResult simulate(const Model& model, Workspace& ws, Observer& observer,
     const bool finite = evaluate_here(t);
     result.max_constraint_violation =
         std::max(result.max_constraint_violation, ws.constraint_violation);
-    if (finite) energy.add(ws, y);
+    // A state that is not finite is told of in the status, not written: the files hold the
+    // rows up to the last finite one (the readers refuse NaN, and a row of NaN shows nothing
+    // the message does not say).
+    if (!finite) return false;
+    energy.add(ws, y);
     observer.output(t, y, ws);
     ++result.outputs;
-    if (!finite) return false;
     if (ws.constraint_violation > kRunViolationLimit) {
       result.status = pulled_apart(model, ws, t);
       return false;

@@ -227,13 +227,18 @@ RunStatus ResultsWriter::finish(const RunResult& r) {
   json channels = json::object();
   for (size_t i = 0; i < channels_.size(); ++i) {
     const ChannelExtremum& p = extrema_.extrema()[i];
-    channels[channels_[i].name] = {{"unit", channels_[i].unit},
-                                   {"description", channels_[i].description},
-                                   {"min", p.min},
-                                   {"t_min", p.t_min},
-                                   {"max", p.max},
-                                   {"t_max", p.t_max},
-                                   {"peak", std::max(std::abs(p.min), std::abs(p.max))}};
+    json& c = channels[channels_[i].name];
+    c = {{"unit", channels_[i].unit}, {"description", channels_[i].description}};
+    if (p.seen) {
+      c.update({{"min", p.min},
+                {"t_min", p.t_min},
+                {"max", p.max},
+                {"t_max", p.t_max},
+                {"peak", std::max(std::abs(p.min), std::abs(p.max))}});
+    } else {  // no finite value (a run that failed at its first output): not 0
+      for (const char* k : {"min", "t_min", "max", "t_max", "peak"}) c[k] = nullptr;
+    }
+    if (p.non_finite) c["non_finite"] = true;
   }
   j["channels"] = channels;
   j["peaks"] = peaks_summary(extrema_);
