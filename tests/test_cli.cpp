@@ -966,6 +966,18 @@ TEST(Cli, AModelRefusedAtAssemblyIsReportedAtTheElement) {
     EXPECT_EQ(r.code, 2) << r.out;
     EXPECT_NE(r.out.find(said), std::string::npos) << r.out;
   }
+  // The same driver 0.1 rad apart from the crank's: assembly cannot close it, and said only
+  // "initial assembly failed: ... (largest residual 0.0707); check the markers", at no line.
+  const size_t b = text.find("  b: {body");
+  text.replace(b, text.find('\n', b) - b, "  b: {body: crank, coordinate: phi, motion: \"0.1 + 523.6*time\"}");
+  std::ofstream(dir / "m.yaml") << text;
+  const Result r = run_lash("check " + (dir / "m.yaml").string());
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find((dir / "m.yaml").string() + ":" + std::to_string(line) +
+                       ":6: driver 'b': initial assembly failed: its equation is redundant with "
+                       "driver 'crank' and disagrees with them by 0.0707"),
+            std::string::npos)
+      << r.out;
   fs::remove_all(dir);
 }
 

@@ -231,27 +231,41 @@ solver: {end_time: 0.5, output_interval: 0.01}
   EXPECT_GT(std::abs((*once.rec)["pin.Fy"].back()), 1.0);
 }
 
-TEST(Redundancy, AnInLineLoopThatCannotCloseSaysItsResidual) {
-  // The double parallelogram posed in line with its third ground pivot 1e-9 m off cannot be
-  // closed; the message printed the residual with %f, as "0.000000".
-  std::string yaml = parallelogram_yaml(3, 1.0, 0.0);
-  const std::string g2 = "G2: [2, 0]";
-  ASSERT_NE(yaml.find(g2), std::string::npos) << yaml;
-  yaml.replace(yaml.find(g2), g2.size(), "G2: [2.000000001, 0]");
-  const Model m = load_model_text(yaml, "inline.yaml").model;
-  Workspace ws(m);
-  try {
-    initial_state(m, ws);
-    FAIL() << "expected an assembly failure";
-  } catch (const std::runtime_error& e) {
-    const std::string what = e.what();
-    EXPECT_NE(what.find("initial assembly failed"), std::string::npos) << what;
-    EXPECT_EQ(what.find("0.000000"), std::string::npos) << what;
-    const size_t at = what.find("largest residual ");
-    ASSERT_NE(at, std::string::npos) << what;
-    const double r = std::stod(what.substr(at + 17));
-    EXPECT_GT(r, 1e-11) << what;  // measured 3.3e-10 m
-    EXPECT_LT(r, 1e-8) << what;
+TEST(Redundancy, ARedundantLoopThatCannotCloseNamesTheJointAndItsDisagreement) {
+  // A double parallelogram whose redundant loop does not close: its third ground pivot 1e-9 m
+  // off, posed in line, or its third crank 1e-9 m longer, posed at 45°. No motion can close it:
+  // least squares leaves 1e-10 to 6e-10 m, beyond the 1e-10 m assembly accepts. The message
+  // printed the residual with %f ("0.000000"), then named no element ("initial assembly failed:
+  // ... largest residual 1.18e-10; check the markers"): it now names the redundant joint (the
+  // one the redundancy warning names when the loop closes), the joints it is redundant with,
+  // and by how much they disagree (the residual's part in Φ_q's left null space).
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"G2: [2, 0]", "G2: [2.000000001, 0]"}, {"A: [0.5, 0]}", "A: [0.500000001, 0]}"}};
+  for (const auto& [from, to] : cases) {
+    SCOPED_TRACE(to);
+    std::string yaml = parallelogram_yaml(3, 1.0, to[0] == 'G' ? 0.0 : M_PI / 4);
+    const size_t at = to[0] == 'G' ? yaml.find(from) : yaml.rfind(from, yaml.find("coupler:"));
+    ASSERT_NE(at, std::string::npos) << yaml;
+    yaml.replace(at, from.size(), to);
+    const Model m = load_model_text(yaml, "inline.yaml").model;
+    Workspace ws(m);
+    try {
+      initial_state(m, ws);
+      FAIL() << "expected an assembly failure";
+    } catch (const std::runtime_error& e) {
+      const std::string what = e.what();
+      EXPECT_EQ(what.rfind("joint 'coupler_2': initial assembly failed: its equations are "
+                           "redundant with joint 'pivot_0', joint 'coupler_0', joint 'pivot_1', "
+                           "joint 'coupler_1', joint 'pivot_2' and disagree with them by ", 0),
+                0u)
+          << what;
+      EXPECT_EQ(what.find("0.000000"), std::string::npos) << what;
+      const size_t by = what.find("disagree with them by ");
+      ASSERT_NE(by, std::string::npos) << what;
+      const double r = std::stod(what.substr(by + 22));
+      EXPECT_GT(r, 1e-10) << what;  // measured 5.8e-10 and 2.9e-10
+      EXPECT_LT(r, 1e-8) << what;
+    }
   }
 }
 

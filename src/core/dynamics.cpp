@@ -5,6 +5,7 @@
 #include <Eigen/QR>
 #include <Eigen/SVD>
 #include <algorithm>
+#include <limits>
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -673,6 +674,66 @@ std::string constraint_problem(const Model& model, Workspace& ws, double t,
 
 namespace {
 
+/// Why assembly failed, at the configuration closest to closing (phi, phi_q there), said at the
+/// element at fault so that the message is placed at its line. Where Φ_q is short of rank
+/// (kRedundancyTolerance) and most of the residual lies in its left null space, the equations
+/// are redundant but disagree: no motion can reduce that part (three parallel cranks one of
+/// which is 1e-9 m longer: 1.2e-10 m is left, beyond the 1e-10 m assembly accepts; two
+/// drivers of one motion whose values differ). The element is then the redundant row's (the
+/// last in the model's order with at least kDropShare of the largest share of the null space,
+/// as the redundancy warning picks it), and the message names those it disagrees with; else it
+/// is the element whose equation is worst off.
+std::string assembly_failure(const Model& model, const Workspace& ws, const Eigen::VectorXd& phi,
+                             const Eigen::MatrixXd& phi_q) {
+  auto owner = [&](Eigen::Index row) {
+    return row < ws.m ? constraint_row_element(model, ws, static_cast<int>(row)).what
+                      : "joint '" + model.joints[ws.clearance_joints[(row - ws.m) / 2]].name + "'";
+  };
+  const Eigen::Index rows = phi.size();
+  Eigen::Index worst = 0;
+  const double residual = phi.cwiseAbs().maxCoeff(&worst);
+  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(phi_q, Eigen::ComputeFullU);
+  const Eigen::VectorXd& sv = svd.singularValues();
+  Eigen::Index rank = 0;
+  while (rank < sv.size() && sv[rank] > kRedundancyTolerance * sv[0]) ++rank;
+  if (rank < rows) {
+    const Eigen::MatrixXd left = svd.matrixU().rightCols(rows - rank);
+    const double disagreement = (left.transpose() * phi).norm();
+    if (disagreement >= 0.5 * phi.norm()) {
+      const Eigen::VectorXd share = left.rowwise().norm();
+      const double most = share.maxCoeff();
+      Eigen::Index pick = 0;
+      for (Eigen::Index r = 0; r < rows; ++r)
+        if (share[r] >= kDropShare * most) pick = r;
+      const std::string who = owner(pick);
+      std::vector<std::string> with;
+      for (Eigen::Index r = 0; r < rows; ++r) {
+        const std::string o = owner(r);
+        if (share[r] > 1e-8 * most && o != who &&
+            std::find(with.begin(), with.end(), o) == with.end())
+          with.push_back(o);
+      }
+      std::string list = with.empty() ? "the others" : "";
+      for (size_t k = 0; k < with.size(); ++k) list += (k ? ", " : "") + with[k];
+      if (std::find(ws.row_of_driver.begin(), ws.row_of_driver.end(), pick) !=
+          ws.row_of_driver.end())
+        return who + ": initial assembly failed: its equation is redundant with " + list +
+               " and disagrees with them by " + residual_text(disagreement) +
+               " (m or rad): the motion it prescribes is already fixed; remove the driver or "
+               "one of those";
+      return who + ": initial assembly failed: its equations are redundant with " + list +
+             " and disagree with them by " + residual_text(disagreement) +
+             " (m or rad; a redundant joint must agree with the others to 1e-10): its markers "
+             "close the loop only approximately (a link slightly longer than the one parallel "
+             "to it, a pivot slightly off); make them agree, or remove the joint";
+    }
+  }
+  return owner(worst) + ": initial assembly failed: the joints and drivers cannot all be "
+                        "satisfied from the given poses (largest residual " +
+         residual_text(residual) + ", in this one's equations); check the markers and initial "
+                                   "positions";
+}
+
 /// At a singular position (Φ_q short of rank beyond any redundancy: a parallelogram in line)
 /// the velocity constraints Φ_q q̇ = −Φ_t leave a direction free that no driver fixes, and the
 /// least-kinetic-energy velocities need not lie on any branch of the motion through it: the
@@ -772,11 +833,13 @@ Eigen::VectorXd initial_state(const Model& model, Workspace& ws) {
   // closed by corrections of every coordinate, which bend the link.
   const bool flexible = std::any_of(model.bodies.begin(), model.bodies.end(),
                                     [](const Body& b) { return b.flexible(); });
-  double residual = 0.0;
+  double residual = 0.0, best = std::numeric_limits<double>::infinity();
+  Eigen::VectorXd best_y = y;
   for (int it = 0; it < 130; ++it) {
     update_kin(ws, y.data());
     build_constraints(model, ws, 0.0, y.data(), ideal, phi, phi_q, nullptr, nullptr);
     residual = phi.cwiseAbs().maxCoeff();
+    if (residual < best) best = residual, best_y = y;
     if (residual < 1e-13) break;
     if (flexible && it < 30) {
       Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(
@@ -787,11 +850,12 @@ Eigen::VectorXd initial_state(const Model& model, Workspace& ws) {
       y.head(nq) -= cod.solve(phi);
     }
   }
-  if (!(residual < 1e-10))
-    throw std::runtime_error("initial assembly failed: the joints and drivers cannot all be "
-                             "satisfied from the given poses (largest residual " +
-                             residual_text(residual) +
-                             "); check the markers and initial positions");
+  if (!(residual < 1e-10)) {
+    // Said at the closest configuration found, and at the element whose equation is worst off.
+    update_kin(ws, best_y.data());
+    build_constraints(model, ws, 0.0, best_y.data(), ideal, phi, phi_q, nullptr, nullptr);
+    throw std::runtime_error(assembly_failure(model, ws, phi, phi_q));
+  }
 
   // Velocities: Φ_q q̇ = −Φ_t by the correction of the initial guess with the least kinetic
   // energy, Δ = L⁻ᵀ (Φ_q L⁻ᵀ)⁺ Φ̇ with M = L Lᵀ (Gauss's principle): from rest (`ideal`) that is the
