@@ -553,7 +553,9 @@ bool evaluate(const Model& model, Workspace& ws, double t, const double* y, doub
       ws.input_power += ws.lambda[r] * (rate - ws.phi_dot[r]);
     }
     ws.stabilization_power = ws.lambda.dot(ws.phi_dot);
-    smallest_multipliers(ws);  // after the powers: those of the solve itself
+    // After the powers: those of the solve itself. Left to report_multipliers while integrating.
+    ws.multipliers_reported = !ws.integrating;
+    if (!ws.integrating) smallest_multipliers(ws);
     ws.constraint_violation = ws.phi.cwiseAbs().maxCoeff();
   } else {
     // No constraints: M q̈ = g, block by block (a flexible link's block through its Cholesky
@@ -576,6 +578,12 @@ bool evaluate(const Model& model, Workspace& ws, double t, const double* y, doub
   ydot[ws.i_stabilization] = ws.stabilization_power;
   return std::isfinite(ws.qdd.sum()) && std::isfinite(ws.dissipated_power) &&
          std::isfinite(ws.stabilization_power);
+}
+
+void report_multipliers(Workspace& ws) {
+  if (ws.multipliers_reported || ws.m == 0 || !ws.solver) return;
+  smallest_multipliers(ws);
+  ws.multipliers_reported = true;
 }
 
 double constraint_residual(const Model& model, Workspace& ws, double t, const double* y) {

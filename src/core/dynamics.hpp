@@ -118,6 +118,13 @@ struct Workspace {
   double stabilization_power = 0.0;
   double constraint_violation = 0.0;  ///< max |Φ|, m or rad
   long rhs_evaluations = 0;
+  /// Set while the integrator evaluates a right-hand side it alone reads: the multipliers are
+  /// left as solved (the powers use those), not replaced by the smallest ones that the
+  /// channels report (smallest_multipliers: per redundant row a solve and an orthogonalisation,
+  /// 75 % of a 40-crank parallelogram's run); report_multipliers() completes such an
+  /// evaluation where its workspace is then observed.
+  bool integrating = false;
+  bool multipliers_reported = true;  ///< the last evaluation's λ are the reported ones
   /// Choices of the redundant rows tried during the run (each an SVD of Φ_q:
   /// reselect_redundant_rows), made or refused.
   long row_choices = 0;
@@ -148,6 +155,11 @@ void update_kin(Workspace& ws, const double* y);
 /// assembly has not). Returns false if a value is not finite (the constraint system itself
 /// always factors: constraint_solver.hpp, kPivotFloor). Throws std::runtime_error if an expression cannot be evaluated.
 bool evaluate(const Model& model, Workspace& ws, double t, const double* y, double* ydot);
+
+/// After an evaluation made with ws.integrating set, the multipliers as the channels report
+/// them (smallest_multipliers); nothing to do after any other. Call before the workspace's
+/// channels are read.
+void report_multipliers(Workspace& ws);
 
 /// Event functions, one per clearance joint: g_k = s_k δ_k with s_k = +1 in free flight and −1 in
 /// contact, so every event is g rising through zero (onset: δ ↑ 0; separation: δ ↓ 0); and,

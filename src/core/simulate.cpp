@@ -230,6 +230,7 @@ void Simulator::hook_steps(Observer* observer) {
     probe->t_end = t1;
     if (const Eigen::VectorXd* y1 = integrator_->evaluated_end()) {
       probe->y_end = *y1;
+      report_multipliers(ws_);  // the integrator's own evaluation, now observed
     } else {
       if (!probe->at(t1)) return;  // not finite: the run loop reports it
       probe->y_end = probe->state();
@@ -293,6 +294,11 @@ Simulator::Simulator(const Model& model, Workspace& ws, std::vector<SectionPlane
   problem.n_events = 2 * ws.nc;
   problem.n_diagnosed = 2 * ws.nq + ws.na;  // not the energy accounts
   problem.rhs = [this](double t, const double* yy, double* dy) {
+    struct Integrating {  // cleared however evaluate() leaves (an ExpressionError throws)
+      Workspace& ws;
+      ~Integrating() { ws.integrating = false; }
+    } guard{ws_};
+    ws_.integrating = true;
     const bool ok = evaluate(model_, ws_, t, yy, dy);
     rhs_violation_ = ws_.constraint_violation;
     return ok;
