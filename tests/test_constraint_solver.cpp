@@ -231,6 +231,38 @@ solver: {end_time: 0.5, output_interval: 0.01}
   EXPECT_GT(std::abs((*once.rec)["pin.Fy"].back()), 1.0);
 }
 
+TEST(Redundancy, JointsThatNearlyRepeatOneAnotherAreWarnedOfAtAssembly) {
+  // A bar pinned to the ground at its end and again a distance e above it: for e above about
+  // 1e-8 m the second pin is not redundant to the test's tolerance, and the two weld the bar by a lever of
+  // about e (reactions ~ loads/e; e = 1e-7 m took 13 million steps and stalled, with no word of
+  // why). Below kNearlyRedundant (smallest singular value of the rows kept against the largest)
+  // assembly says so; at e = 1e-5 m (ratio 4e-6, 0.07 s a run) and e = 1e-9 m (both equations
+  // redundant to the tolerance: a pendulum) it does not.
+  auto warned = [](const std::string& e) {
+    const std::string yaml =
+        "gravity: [0, -9.81]\nground: {markers: {O: [0, 0], O2: [0, " + e + "]}}\nbodies:\n"
+        "  arm: {mass: 1, inertia: 0.0833333, position: [0.5, 0], markers: {O: [-0.5, 0], O2: "
+        "[-0.5, " + e + "]}}\njoints:\n  pin: {type: revolute, journal: arm.O, bearing: ground.O}\n"
+        "  pin2: {type: revolute, journal: arm.O2, bearing: ground.O2}\n"
+        "solver: {end_time: 1, output_interval: 0.01}\n";
+    const Model m = load_model_text(yaml, "inline.yaml").model;
+    Workspace ws(m);
+    initial_state(m, ws);
+    std::string found;
+    for (const std::string& w : ws.warnings)
+      if (w.find("nearly redundant") != std::string::npos) found = w;
+    return found;
+  };
+  for (const char* e : {"1e-7", "1e-6"}) {
+    const std::string w = warned(e);
+    EXPECT_EQ(w.rfind("joint 'pin': its equations kept are nearly redundant with joint 'pin2' (the "
+                      "smallest singular value of the rows kept is ", 0),
+              0u)
+        << e << ": " << w;
+  }
+  for (const char* e : {"1e-5", "1e-9"}) EXPECT_EQ(warned(e), "") << e;
+}
+
 TEST(Redundancy, ARedundantLoopThatCannotCloseNamesTheJointAndItsDisagreement) {
   // A double parallelogram whose redundant loop does not close: its third ground pivot 1e-9 m
   // off, posed in line, or its third crank 1e-9 m longer, posed at 45°. No motion can close it:

@@ -489,6 +489,39 @@ void FixedPatternLdlt::solve(Eigen::VectorXd& x) const {
 void prepare_constraint_solver(const Model& model, Workspace& ws, const Eigen::MatrixXd& phi_q,
                                const JacobianPattern& pattern, bool chosen_again) {
   build_solver(model, ws, phi_q, pattern, false);
+  if (!chosen_again && !ws.solver->dropped.empty() &&
+      ws.solver->rank_reference < kNearlyRedundant) {
+    // Named: the kept row with the largest share of the weakest direction (the last left
+    // singular vector of the rows kept), with the others holding at least kDropShare of it.
+    const ConstraintSolver& s = *ws.solver;
+    Eigen::MatrixXd kept(s.active.size(), ws.nq);
+    for (size_t a = 0; a < s.active.size(); ++a) kept.row(a) = phi_q.row(s.active[a]);
+    const Eigen::JacobiSVD<Eigen::MatrixXd> svd(kept, Eigen::ComputeFullU);
+    const Eigen::VectorXd weakest = svd.matrixU().col(kept.rows() - 1).cwiseAbs();
+    Eigen::Index top = 0;
+    weakest.maxCoeff(&top);
+    const std::vector<RowOwner> owner = row_owners(model, ws);
+    const std::string what = owner_name(model, owner[s.active[top]]);
+    std::vector<std::string> with;
+    for (Eigen::Index a = 0; a < weakest.size(); ++a) {
+      const std::string o = owner_name(model, owner[s.active[a]]);
+      if (weakest[a] >= kDropShare * weakest[top] && o != what &&
+          std::find(with.begin(), with.end(), o) == with.end())
+        with.push_back(o);
+    }
+    std::string names;
+    for (size_t k = 0; k < with.size(); ++k) names += (k ? ", " : "") + with[k];
+    char ratio[32];
+    std::snprintf(ratio, sizeof ratio, "%.2g", s.rank_reference);
+    ws.warnings.push_back(
+        what + ": its equations kept are nearly redundant with " +
+        (names.empty() ? std::string("the other joints'") : names) +
+        " (the smallest singular value of the rows kept is " + ratio +
+        " of the largest, at assembly and nearby): the joints nearly repeat one another without "
+        "quite agreeing, so they hold the mechanism by a lever of about that size, with "
+        "reactions of about 1/" + ratio + " times the loads and very small steps; if they are "
+        "meant to repeat one another, make their markers agree to 1e-10 m");
+  }
   // Safety net: a row pivot near 0 at assembly means an anchoring to an earlier body left a
   // leading block nearly singular; then every row goes after all of its bodies (safe whenever
   // the rows are independent, at the price of more fill).

@@ -44,6 +44,13 @@ inline constexpr double kRedundancyTolerance = 1e-8;
 /// leave the rows kept nearly dependent.
 inline constexpr double kDropShare = 0.1;
 
+/// A redundant mechanism whose rows kept are this close to dependent (the smallest singular
+/// value of their Φ_q against the largest, at assembly and at every configuration probed
+/// nearby: ConstraintSolver::rank_reference) is warned of at assembly: its joints nearly repeat
+/// one another without quite agreeing (two pins 1e-7 m apart), so they hold it by a lever of
+/// that size, with reactions of about 1/ratio times the loads and very small steps.
+inline constexpr double kNearlyRedundant = 1e-6;
+
 /// The regularisation of the augmented system: row a gets ε_a = kRegularisation · W_aa, its own
 /// diagonal entry of W = Φ_q M⁻¹ Φ_qᵀ at assembly (about 100 units of round-off of that entry,
 /// so that no pivot changes sign by round-off), i.e. εD with D = diag(W). It changes λ by at most
