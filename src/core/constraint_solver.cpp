@@ -501,21 +501,14 @@ void prepare_constraint_solver(const Model& model, Workspace& ws, const Eigen::M
     Eigen::Index top = 0;
     weakest.maxCoeff(&top);
     const std::vector<RowOwner> owner = row_owners(model, ws);
-    const std::string what = owner_name(model, owner[s.active[top]]);
-    std::vector<std::string> with;
-    for (Eigen::Index a = 0; a < weakest.size(); ++a) {
-      const std::string o = owner_name(model, owner[s.active[a]]);
-      if (weakest[a] >= kDropShare * weakest[top] && o != what &&
-          std::find(with.begin(), with.end(), o) == with.end())
-        with.push_back(o);
-    }
-    std::string names;
-    for (size_t k = 0; k < with.size(); ++k) names += (k ? ", " : "") + with[k];
+    std::vector<std::string> names;
+    for (int r : s.active) names.push_back(owner_name(model, owner[r]));
+    const std::string what = names[top];
     char ratio[32];
     std::snprintf(ratio, sizeof ratio, "%.2g", s.rank_reference);
     ws.warnings.push_back(
         what + ": its equations kept are nearly redundant with " +
-        (names.empty() ? std::string("the other joints'") : names) +
+        other_names(names, weakest, kDropShare * weakest[top], what) +
         " (the smallest singular value of the rows kept is " + ratio +
         " of the largest, at assembly and nearby): the joints nearly repeat one another without "
         "quite agreeing, so they hold the mechanism by a lever of about that size, with "
@@ -725,6 +718,20 @@ bool reselect_redundant_rows(const Model& model, Workspace& ws) {
   ws.solver->reselect_wait = kReselectWait;
   ws.warnings = warnings;
   return true;
+}
+
+std::string other_names(const std::vector<std::string>& names, const Eigen::VectorXd& share,
+                        double least, const std::string& except) {
+  std::vector<std::string> seen;
+  std::string list;
+  for (size_t r = 0; r < names.size(); ++r) {
+    if (!(share[static_cast<Eigen::Index>(r)] >= least) || names[r] == except ||
+        std::find(seen.begin(), seen.end(), names[r]) != seen.end())
+      continue;
+    list += (seen.empty() ? "" : ", ") + names[r];
+    seen.push_back(names[r]);
+  }
+  return seen.empty() ? "the others" : list;
 }
 
 RowElement constraint_row_element(const Model& model, const Workspace& ws, int row) {

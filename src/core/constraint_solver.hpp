@@ -326,4 +326,9 @@ struct RowElement {
 };
 RowElement constraint_row_element(const Model& model, const Workspace& ws, int row);
 
+/// The names in `names` (as messages name elements) whose `share` is at least `least`, other
+/// than `except`, each once, in order, joined with ", "; "the others" if none.
+std::string other_names(const std::vector<std::string>& names, const Eigen::VectorXd& share,
+                        double least, const std::string& except);
+
 }  // namespace lash

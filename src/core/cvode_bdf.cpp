@@ -336,7 +336,7 @@ class CvodeBdf final : public Integrator {
   IntegratorStats accumulated_;
   std::string last_error_;
   std::exception_ptr pending_;  ///< thrown by the right-hand side during CVode()
-  Eigen::VectorXd projected_;   ///< the step's end handed to p_.project
+  Eigen::VectorXd projected_;   ///< the step's end handed to p_.project and p_.halt
   bool restarted_ = false;      ///< a projection set CVODE's first step (reset() clears it)
   long rhs_failures_ = 0;       ///< failed right-hand sides since one succeeded past failed_at_
   double failed_at_ = 0.0;      ///< time of the last failed right-hand side

@@ -713,16 +713,10 @@ std::string assembly_failure(const Model& model, const Workspace& ws, const Eige
       Eigen::Index pick = 0;
       for (Eigen::Index r = 0; r < rows; ++r)
         if (share[r] >= kDropShare * most) pick = r;
-      const std::string who = owner(pick);
-      std::vector<std::string> with;
-      for (Eigen::Index r = 0; r < rows; ++r) {
-        const std::string o = owner(r);
-        if (share[r] > 1e-8 * most && o != who &&
-            std::find(with.begin(), with.end(), o) == with.end())
-          with.push_back(o);
-      }
-      std::string list = with.empty() ? "the others" : "";
-      for (size_t k = 0; k < with.size(); ++k) list += (k ? ", " : "") + with[k];
+      std::vector<std::string> names;
+      for (Eigen::Index r = 0; r < rows; ++r) names.push_back(owner(r));
+      const std::string& who = names[pick];
+      const std::string list = other_names(names, share, 1e-8 * most, who);
       if (std::find(ws.row_of_driver.begin(), ws.row_of_driver.end(), pick) !=
           ws.row_of_driver.end())
         return who + ": initial assembly failed: its equation is redundant with " + list +
@@ -782,14 +776,14 @@ void velocities_on_a_branch(const Model& model, Workspace& ws, bool close_cleara
     return Eigen::VectorXd(left.transpose() * gamma);
   };
   const double tolerance = 1e-10 * scale;
-  if (residual(Eigen::VectorXd::Zero(nq - rank)).norm() <= 1e3 * tolerance) return;  // y as given
+  const Eigen::VectorXd f0 = residual(Eigen::VectorXd::Zero(nq - rank));
+  if (f0.norm() <= 1e3 * tolerance) return;  // y as given
   // The starts' size: the velocities' own, or from rest (F(a) = F(0) + Q(a), Q quadratic, no
   // linear term to move Newton off a = 0) the size at which Q balances F(0), Q(±e_i) measured
   // along each free direction (a slider-crank driven at its slider from rest at dead centre:
   // the crank started at rest, and a push of 3.4e8 N started it).
   double s = (chol.matrixU() * v0).norm();
   if (!(s > 0.0)) {
-    const Eigen::VectorXd f0 = residual(Eigen::VectorXd::Zero(nq - rank));
     double q = 0.0;
     for (int i = 0; i < nq - rank; ++i) {
       const Eigen::VectorXd e = Eigen::VectorXd::Unit(nq - rank, i);
