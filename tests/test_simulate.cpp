@@ -351,14 +351,15 @@ TEST(Examples, LuGreAndAbsorberExamplesRunWithTheirEnergyBalance) {
   EXPECT_EQ(tmd.rec->data.count("rod_accel.a"), 1u);
 }
 
-TEST(Failure, JointsPulledApartStopTheRunNamingTheJoint) {
+TEST(Failure, JointsPulledApartStopTheRunNamingTheDriverAtFault) {
   // A four-bar (ground 2, crank 1, coupler 0.8, rocker 1.5) cannot turn its crank past the
   // position where coupler and rocker lie in line, |A − Q|² = 5 − 4 cos θ = 2.3², θ = 94.16°:
   // 4.16° past its start, t = 0.01156 s at 60 rpm. Driven on, its joints come apart. BDF went
   // on to t = 1 s with a constraint residual of 21.9 m and said "completed". Now both
-  // integrators stop at the first step past the lock whose end is pulled apart, naming a joint,
-  // whatever the output interval (with outputs every 0.1 s they stopped at the first output,
-  // 0.1 s, 0.088 s after the lock).
+  // integrators stop at the first step past the lock whose end is pulled apart, whatever the
+  // output interval (with outputs every 0.1 s they stopped at the first output, 0.1 s, 0.088 s
+  // after the lock), and name the driver: the joints close again without it (they named the
+  // joint worst off, 'rb', which is where the driver's demand shows, not what makes it).
   const std::string yaml = R"Y(
 gravity: [0, -9.81]
 ground: {markers: {O: [0, 0], Q: [2, 0]}}
@@ -385,17 +386,60 @@ solver: {end_time: 1.0, output_interval: 0.001}
     EXPECT_EQ(st.outcome, RunOutcome::failed);
     EXPECT_GT(st.t, 0.01156);
     EXPECT_LE(st.t, 0.013);
-    EXPECT_NE(st.message.find("joint '" + st.element + "': pulled apart: its constraint residual is "),
-              std::string::npos) << st.message;
-    // Steps too large for the stabilization are among the causes: the hint names the rtol.
-    EXPECT_NE(st.message.find("a smaller solver.rtol than 1e-08 may cure that"), std::string::npos)
+    EXPECT_EQ(st.element, "d");
+    EXPECT_EQ(st.message.find("driver 'd': the mechanism cannot follow it at t = "), 0u)
         << st.message;
-    EXPECT_TRUE(st.element == "pivot" || st.element == "cb" || st.element == "rb" ||
-                st.element == "rq") << st.element;
+    EXPECT_NE(st.message.find("the joints close again without this driver"), std::string::npos)
+        << st.message;
+    EXPECT_NE(st.message.find(" is pulled apart (constraint residual "), std::string::npos)
+        << st.message;
     // Every output up to the failure was delivered, and a last row at it (off the output grid
     // where a step's end failed); the run's residual is that row's.
     ASSERT_FALSE(r.rec->time.empty());
     EXPECT_EQ(r.rec->time.back(), st.t);
     EXPECT_GT(r.result.max_constraint_violation, 1e-3);
   }
+}
+
+TEST(Failure, PulledApartNamesADriverOnlyWhereTheJointsCloseWithoutIt) {
+  // drivers_out_of_reach tells a driver past the mechanism's reach from joints that came apart
+  // where they could have closed. A slider-crank (crank 0.1 m, rod 0.3 m) whose slider is driven
+  // to x = 0.4 + 0.1 sin(2πt) from x = 0.4: beyond a + L = 0.4 at once, so the driver is at fault
+  // (the joints close at the crank's and rod's any angles without it). Then the same mechanism at
+  // the state of a run with a configuration that closes nearby: the joints moved 5 mm apart
+  // from an assembled state (the run lost them): no driver is at fault.
+  const std::string yaml = R"Y(
+gravity: [0, -9.81]
+ground: {markers: {O: [0, 0]}}
+bodies:
+  crank: {mass: 1, inertia: 0.0008333333333333335, position: [0.05, 0.0], angle: 0.0, markers: {O: [-0.05, 0], A: [0.05, 0]}}
+  rod: {mass: 1, inertia: 0.0075, position: [0.25, 0.0], angle: -0.0, markers: {A: [-0.15, 0], B: [0.15, 0]}}
+  slider: {mass: 1, inertia: 0.01, position: [0.4, 0], markers: {O: [0, 0]}}
+joints:
+  crank_pivot: {type: revolute, journal: crank.O, bearing: ground.O}
+  crank_rod: {type: revolute, journal: crank.A, bearing: rod.A}
+  rod_slider: {type: revolute, journal: rod.B, bearing: slider.O}
+  guide: {type: translational, guide: ground.O, slider: slider.O, axis: [1, 0]}
+drivers:
+  push: {joint: guide, motion: "0.1*sin(2*pi*time)"}
+solver: {end_time: 0.1, output_interval: 0.001}
+)Y";
+  const SimRun r = run_text(yaml);
+  ASSERT_FALSE(r.result.status.ok);
+  EXPECT_EQ(r.result.status.element, "push");
+  EXPECT_EQ(r.result.status.message.find("driver 'push': the mechanism cannot follow it"), 0u)
+      << r.result.status.message;
+
+  const Model m = load_model_text(yaml, "test.yaml", {}).model;
+  Workspace ws(m);
+  Eigen::VectorXd y = initial_state(m, ws);
+  // At t = 0 the state closes: nothing to name.
+  EXPECT_TRUE(drivers_out_of_reach(m, ws, 0.0, y).empty());
+  // At t = 0.01 the driver asks for x = 0.4063 > 0.4: it alone is at fault.
+  EXPECT_EQ(drivers_out_of_reach(m, ws, 0.01, y), std::vector<int>{0});
+  // The rod moved 5 mm along y at t = 0 (both its pins off by 5 mm): the configuration the
+  // joints and the driver ask for is at hand.
+  y[ws.blocks[1].offset + 1] += 5e-3;
+  EXPECT_GT(constraint_residual(m, ws, 0.0, y.data()), 4e-3);
+  EXPECT_TRUE(drivers_out_of_reach(m, ws, 0.0, y).empty());
 }

@@ -650,6 +650,54 @@ void project_state(const Model& model, Workspace& ws, double t, Eigen::VectorXd&
   y.segment(nq, nq) -= cod.solve(phi_dot);
 }
 
+std::vector<int> drivers_out_of_reach(const Model& model, Workspace& ws, double t,
+                                      const Eigen::VectorXd& y) {
+  std::vector<int> found;
+  if (ws.m == 0 || model.drivers.empty()) return found;
+  const int nq = ws.nq;
+  Eigen::VectorXd phi(ws.m), part, yy;
+  Eigen::MatrixXd phi_q(ws.m, nq), part_q;
+  // Gauss–Newton on the rows not left out, from y's positions: do they close (to the 1e-10 that
+  // assembly accepts)? Least squares where they cannot, stopped when it no longer gains.
+  std::vector<bool> out(ws.m, false);
+  auto close = [&]() {
+    std::vector<int> rows;
+    for (int r = 0; r < ws.m; ++r)
+      if (!out[r]) rows.push_back(r);
+    part.resize(static_cast<Eigen::Index>(rows.size()));
+    part_q.resize(part.size(), nq);
+    yy = y;
+    double last = std::numeric_limits<double>::infinity();
+    for (int it = 0; it < 60; ++it) {
+      update_kin(ws, yy.data());
+      build_constraints(model, ws, t, yy.data(), false, phi, phi_q, nullptr, nullptr);
+      for (size_t i = 0; i < rows.size(); ++i) {
+        part[static_cast<Eigen::Index>(i)] = phi[rows[i]];
+        part_q.row(static_cast<Eigen::Index>(i)) = phi_q.row(rows[i]);
+      }
+      const double residual = part.cwiseAbs().maxCoeff();
+      if (residual < 1e-10) return true;
+      if (!(residual < 0.99 * last)) return false;
+      last = residual;
+      yy.head(nq) -= Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd>(part_q).solve(part);
+    }
+    return false;
+  };
+  const bool all_close = close();
+  for (const int r : ws.row_of_driver) out[r] = true;
+  if (!all_close && close()) {
+    // Each driver alone: the joints and the other drivers close without it.
+    for (size_t d = 0; d < model.drivers.size() && d < 16; ++d) {
+      for (size_t k = 0; k < model.drivers.size(); ++k) out[ws.row_of_driver[k]] = k == d;
+      if (close()) found.push_back(static_cast<int>(d));
+    }
+    if (found.empty())  // only together: all of them
+      for (size_t d = 0; d < model.drivers.size(); ++d) found.push_back(static_cast<int>(d));
+  }
+  update_kin(ws, y.data());
+  return found;
+}
+
 std::string constraint_problem(const Model& model, Workspace& ws, double t,
                                const Eigen::VectorXd& y, bool check_residual) {
   if (ws.m == 0) return "";

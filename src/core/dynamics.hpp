@@ -225,6 +225,16 @@ bool project_onto_constraints(const Model& model, Workspace& ws, double t, Eigen
 /// state consistently (Lyapunov exponents). Throws std::runtime_error if it does not converge.
 void project_state(const Model& model, Workspace& ws, double t, Eigen::VectorXd& y);
 
+/// Where the joints and drivers no longer close at (t, y) (a run pulled apart): the drivers
+/// that ask for what the mechanism cannot do. Empty when a configuration near y satisfies every
+/// joint and driver (the run lost it: steps too large for the stabilization), or when the
+/// joints do not close even without the drivers; otherwise the drivers (model order, the first
+/// 16 tried) without any one of which the rest close, or all of them if only leaving out all
+/// closes. Gauss–Newton from y's positions (at most 60 iterations per trial); restores ws's
+/// kinematics to y.
+std::vector<int> drivers_out_of_reach(const Model& model, Workspace& ws, double t,
+                                      const Eigen::VectorXd& y);
+
 /// Driver coordinate target f and its derivatives at t (rad or m); `y` supplies the integrated
 /// position of a speed profile.
 void driver_motion(const Model& model, const Workspace& ws, int d, double t, const double* y,

@@ -171,14 +171,30 @@ RunStatus through_bearing(const Model& model, const Workspace& ws, int k, double
   return {false, t, j.name, s.str()};
 }
 
-/// The joints no longer hold: |Φ| beyond kRunViolationLimit. The row worst off names the
-/// element. ws holds the evaluation at t.
-RunStatus pulled_apart(const Model& model, const Workspace& ws, double t) {
+/// The joints no longer hold: |Φ| beyond kRunViolationLimit. A driver that asks for what the
+/// mechanism cannot do (drivers_out_of_reach: a motion past its reach, or on through a position
+/// where it locks) names the element; otherwise the row worst off. ws holds the evaluation at
+/// (t, y).
+RunStatus pulled_apart(const Model& model, Workspace& ws, double t, const Eigen::VectorXd& y) {
   Eigen::Index row = 0;
   const double worst = ws.phi.cwiseAbs().maxCoeff(&row);
   const RowElement e = constraint_row_element(model, ws, static_cast<int>(row));
+  const std::vector<int> drivers = drivers_out_of_reach(model, ws, t, y);
   std::ostringstream s;
   s.precision(9);  // a step's end just past the limit: 0.00100000034, not "0.001"
+  if (!drivers.empty()) {
+    const std::string& first = model.drivers[drivers[0]].name;
+    s << "driver '" << first << "'";
+    for (size_t k = 1; k < drivers.size(); ++k) s << ", driver '" << model.drivers[drivers[k]].name << "'";
+    s << ": the mechanism cannot follow " << (drivers.size() > 1 ? "them" : "it") << " at t = "
+      << t << " s: " << e.what << " is pulled apart (constraint residual " << worst
+      << " m or rad, beyond the " << kRunViolationLimit
+      << " a run allows), and the joints close again without "
+      << (drivers.size() > 1 ? "any one of these drivers" : "this driver")
+      << ": it prescribes a motion past the mechanism's reach, or on through a position where "
+         "the mechanism locks";
+    return {false, t, first, s.str()};
+  }
   s << e.what << ": pulled apart: its constraint residual is " << worst << " (m or rad) at t = "
     << t << " s, beyond the " << kRunViolationLimit
     << " a run allows: the mechanism cannot follow its joints and drivers here (a driver "
@@ -437,7 +453,7 @@ bool Simulator::advance_to(double t_target, Observer* observer) try {
     if (adv.kind == Advance::stopped) {  // at a step's end, between outputs
       evaluate(model_, ws_, t_, y_.data(), ydot_.data());
       if (pulled_apart_) {
-        status_ = pulled_apart(model_, ws_, t_);
+        status_ = pulled_apart(model_, ws_, t_, y_);
         return false;
       }
       char at[64];
@@ -785,7 +801,7 @@ RunResult simulate(const Model& model, Workspace& ws, Observer& observer,
     observer.output(t, y, ws);
     ++result.outputs;
     if (ws.constraint_violation > kRunViolationLimit) {
-      result.status = pulled_apart(model, ws, t);
+      result.status = pulled_apart(model, ws, t, y);
       return false;
     }
     // A journal past its own radius into the wall at an output: the start state (a --from
