@@ -225,8 +225,8 @@ struct ConstraintSolver {
   Eigen::VectorXd x;            ///< right-hand side, then solution, in elimination order
   /// Redundant rows (dropped at assembly), ascending, and what reporting the smallest
   /// multipliers takes (smallest_multipliers): a basis N of Φ_q's left null space (m × dropped,
-  /// and one more column per weak row near a singular position), orthonormalised in place, and
-  /// a work vector.
+  /// and one more column per weak row near a singular position), orthonormalised in place near
+  /// a singular position, NᵀN otherwise, and a work vector.
   std::vector<int> dropped;
   JacobianPattern pattern;  ///< as given at set-up (reselect_redundant_rows builds again from it)
   /// σ_(m−dropped)/σ_1 of Φ_q, the largest at assembly and the configurations nearby
@@ -236,7 +236,7 @@ struct ConstraintSolver {
   /// position (kReselectWait).
   int reselect_wait = 0;
   std::vector<int> weak;  ///< active rows near a singular position (smallest_multipliers)
-  Eigen::MatrixXd null_basis;
+  Eigen::MatrixXd null_basis, null_gram;
   Eigen::VectorXd null_work;
 };
 
