@@ -167,6 +167,43 @@ TEST(ModelLoader, MissingRequiredKeys) {
   EXPECT_NE(d[0].message.find("missing required key 'end_time'"), std::string::npos);
 }
 
+TEST(ModelLoader, AKeyLeftEmptyIsAnErrorAtTheKeyNotItsDefault) {
+  // An empty value (`key:` with nothing after it, or ~) was taken for a missing key: a
+  // forgotten clearance made the joint ideal and a forgotten stiffness a spring of 0 N/m, and
+  // the runs completed without a word.
+  auto d = problems(with("    clearance: 0.5e-3\n", "    clearance:\n"));
+  ASSERT_EQ(d.size(), 1u);
+  EXPECT_EQ(d[0].str(),
+            "model.yaml:24:5: joint 'gudgeon': 'clearance' must be a number (m), got an empty value");
+  // At the key, not at the next token (the value's own position, two lines on).
+  d = problems(with("    mass: 0.21\n", "    mass:\n"));
+  ASSERT_EQ(d.size(), 1u);
+  EXPECT_EQ(d[0].str(), "model.yaml:12:5: body 'rod': 'mass' must be a number (kg), got an empty value");
+  d = problems(with("gravity: [0, -9.81]", "gravity: ~"));
+  ASSERT_EQ(d.size(), 1u);
+  EXPECT_EQ(d[0].str(),
+            "model.yaml:2:1: model: 'gravity' must be a pair of finite numbers [x, y] (m/s²), got an empty value");
+  d = problems(with("speed_rpm: 5000", "speed_rpm: "));
+  ASSERT_EQ(d.size(), 1u);
+  EXPECT_EQ(d[0].str(),
+            "model.yaml:31:25: driver 'motor': 'speed_rpm' must be a number (rev/min), got an empty value");
+  // A map left empty: said once, not again as what it would have given.
+  d = problems(with("    material: {youngs_modulus: 207e9, poisson_ratio: 0.3}", "    material:"));
+  ASSERT_EQ(d.size(), 1u);
+  EXPECT_EQ(d[0].str(), "model.yaml:26:5: joint 'gudgeon': 'material' must be a map of keys (key: "
+                        "value), got an empty value");
+  d = problems(with("  output_interval: 1.0e-5\n", "  output_interval: 1.0e-5\n  baumgarte:\n"));
+  ASSERT_EQ(d.size(), 1u);
+  EXPECT_EQ(d[0].str(), "model.yaml:35:3: solver: 'baumgarte' must be a map of keys (key: "
+                        "value), got an empty value");
+  // In clearance_defaults, said at the default's key.
+  d = problems(with("joints:\n", "clearance_defaults:\n  min_impact_velocity:\njoints:\n"));
+  ASSERT_EQ(d.size(), 1u);
+  EXPECT_EQ(d[0].str(), "model.yaml:18:3: joint 'gudgeon': 'min_impact_velocity' must be a number (m/s), got an empty value");
+  // Collections may be empty: a section whose entries are all commented out.
+  EXPECT_TRUE(problems(std::string(kGood) + "loads:\n  # spring: {type: spring_damper}\nsensors:\n").empty());
+}
+
 TEST(ModelLoader, ImpactLawNeedsItsDampingParameters) {
   const auto d = problems(with("normal_law: lankarani_nikravesh", "normal_law: impact"));
   ASSERT_EQ(d.size(), 2u);

@@ -97,11 +97,41 @@ class Section {
     if (n.IsScalar()) return "'" + n.Scalar() + "'";
     if (n.IsSequence()) return "a list";
     if (n.IsMap()) return "a map";
-    return "nothing";
+    return "an empty value";
   }
 
-  bool has(const std::string& key) const { return node_[key].IsDefined() && !node_[key].IsNull(); }
+  /// The key is given. An empty value (`key:` with nothing after it, or `~`) counts as given,
+  /// so that reading it says what was expected (a forgotten clearance made the joint ideal, a
+  /// forgotten stiffness a spring of 0 N/m, without a word); only a collection of elements or
+  /// markers, the solver's map and the description may be empty.
+  bool has(const std::string& key) const {
+    const YAML::Node n = node_[key];
+    if (!n.IsDefined()) return false;
+    if (!n.IsNull()) return true;
+    static const char* const may_be_empty[] = {"ground", "bodies", "joints", "clearance_defaults",
+                                               "drivers", "loads", "sensors", "solver",
+                                               "markers", "output_channels", "description"};
+    return std::none_of(std::begin(may_be_empty), std::end(may_be_empty),
+                        [&](const char* k) { return key == k; });
+  }
   YAML::Node get(const std::string& key) const { return node_[key]; }
+  /// A key whose value must be a map (friction, material, flexible, section, baumgarte): true,
+  /// reported, where it was left empty.
+  bool empty_map(const std::string& key) {
+    const YAML::Node n = node_[key];
+    if (!n.IsDefined() || !n.IsNull()) return false;
+    r_.error(at(key), element_, "'" + key + "' must be a map of keys (key: value), got an empty value");
+    return true;
+  }
+  /// Where a problem with the key's value is reported: the value, or the key itself where the
+  /// value is empty (an empty value's position is the next token's, often on a later line).
+  YAML::Node at(const std::string& key) const {
+    const YAML::Node n = node_[key];
+    if (!n.IsDefined() || !n.IsNull()) return n;
+    for (const auto& kv : node_)
+      if (kv.first.as<std::string>("") == key) return kv.first;
+    return n;
+  }
   const YAML::Node& node() const { return node_; }
   /// Where a problem of the whole element is reported: the map itself, or where it was expected
   /// (node() is an empty map without a position when the element is not a map).
@@ -118,7 +148,7 @@ class Section {
     const YAML::Node n = node_[key];
     double v = 0.0;
     if (!n.IsScalar() || !YAML::convert<double>::decode(n, v) || !std::isfinite(v)) {
-      r_.error(n, element_, "'" + key + "' must be a number" + units + ", got " + kind(n));
+      r_.error(at(key), element_, "'" + key + "' must be a number" + units + ", got " + kind(n));
       return std::nullopt;
     }
     if (subnormal(v)) {
@@ -148,7 +178,7 @@ class Section {
     if (!has(key)) return std::nullopt;
     const YAML::Node n = node_[key];
     if (!n.IsScalar()) {
-      r_.error(n, element_, "'" + key + "' must be a single value, got " + kind(n));
+      r_.error(at(key), element_, "'" + key + "' must be a single value, got " + kind(n));
       return std::nullopt;
     }
     return n.Scalar();
@@ -160,7 +190,7 @@ class Section {
     if (!n.IsSequence() || n.size() != 2 || !YAML::convert<double>::decode(n[0], x) ||
         !YAML::convert<double>::decode(n[1], y) || !std::isfinite(x) || !std::isfinite(y) ||
         subnormal(x) || subnormal(y)) {
-      r_.error(n, element_, "'" + key + "' must be a pair of finite numbers [x, y]" + units +
+      r_.error(at(key), element_, "'" + key + "' must be a pair of finite numbers [x, y]" + units +
                                 ", got " + (n.IsSequence() ? "[" + join_scalars(n) + "]" : kind(n)));
       return std::nullopt;
     }
@@ -408,13 +438,13 @@ class Loader {
         b.type = BodyType::point_mass;  // no inertia: a point mass, coordinates [x, y]
         for (const char* k : {"angle", "angle_deg", "angular_velocity"})
           if (s.has(k))
-            r_.error(s.get(k), s.element(),
+            r_.error(s.at(k), s.element(),
                      std::string("a body without 'inertia' is a point mass, which has no angle; "
                                  "remove '") + k + "' or give 'inertia'");
       }
       b.r0 = s.vec2("position", " (m)").value_or(Vec2::Zero());
       if (s.has("angle") && s.has("angle_deg"))
-        r_.error(s.get("angle_deg"), s.element(), "give 'angle' (rad) or 'angle_deg', not both");
+        r_.error(s.at("angle_deg"), s.element(), "give 'angle' (rad) or 'angle_deg', not both");
       b.phi0 = s.number("angle", " (rad)").value_or(0.0);
       if (auto deg = s.number("angle_deg", " (degrees)")) b.phi0 = *deg * M_PI / 180.0;
       b.v0 = s.vec2("velocity", " (m/s)").value_or(Vec2::Zero());
@@ -427,6 +457,7 @@ class Loader {
 
   /// A body's `flexible:` map: an ANCF beam (core/beam.hpp) along the body's x axis.
   void read_flexible(Section& body, Body& b) {
+    if (body.empty_map("flexible")) return;
     Section f(r_, body.get("flexible"), body.where(), body.element() + " flexible",
               {"length", "elements", "section", "youngs_modulus", "density", "damping"});
     beam::Mesh& m = b.mesh;
@@ -434,7 +465,7 @@ class Loader {
                                  positive, 1.0);
     const double elements = f.number("elements", "", positive).value_or(4.0);
     if (elements != std::floor(elements) || elements > 1000)
-      r_.error(f.get("elements"), f.element(), "elements must be a whole number 1 … 1000");
+      r_.error(f.at("elements"), f.element(), "elements must be a whole number 1 … 1000");
     else
       m.elements = static_cast<int>(elements);
     const double e = f.required_number("youngs_modulus", " (Pa)", positive, 1.0);
@@ -442,16 +473,17 @@ class Loader {
     b.structural_damping =
         f.number("damping", " (s, Kelvin–Voigt retardation time)", non_negative).value_or(0.0);
     if (!f.has("section")) {
-      r_.error(f.get("length").IsDefined() ? body.get("flexible") : body.where(), f.element(),
+      r_.error(f.at("length").IsDefined() ? body.at("flexible") : body.where(), f.element(),
                "missing required key 'section': {rectangle: [width, height]}, {tube: [outer "
                "diameter, inner diameter]}, {circle: diameter} or {area, inertia, fibre}");
       return;
     }
+    if (f.empty_map("section")) return;
     Section sec(r_, f.get("section"), f.where(), f.element() + " section",
                 {"rectangle", "tube", "circle", "area", "inertia", "fibre"});
     const int shapes = sec.has("rectangle") + sec.has("tube") + sec.has("circle") + sec.has("area");
     if (shapes != 1) {
-      r_.error(f.get("section"), sec.element(),
+      r_.error(f.at("section"), sec.element(),
                "give exactly one of rectangle: [width, height], tube: [outer diameter, inner "
                "diameter], circle: diameter, or area with inertia and fibre");
       return;
@@ -459,11 +491,11 @@ class Loader {
     beam::Section& s = m.section;
     if (auto r = sec.vec2("rectangle", " (m: width across the plane, height in it)")) {
       if (!(r->x() > 0 && r->y() > 0))
-        r_.error(sec.get("rectangle"), sec.element(), "width and height must be > 0 m");
+        r_.error(sec.at("rectangle"), sec.element(), "width and height must be > 0 m");
       s = beam::rectangle(r->x(), r->y(), e, rho);
     } else if (auto t = sec.vec2("tube", " (m: outer and inner diameter)")) {
       if (!(t->x() > t->y() && t->y() >= 0))
-        r_.error(sec.get("tube"), sec.element(), "outer diameter must exceed the inner one (>= 0)");
+        r_.error(sec.at("tube"), sec.element(), "outer diameter must exceed the inner one (>= 0)");
       const double d4 = std::pow(t->x(), 4) - std::pow(t->y(), 4);
       s.area = M_PI / 4.0 * (t->x() * t->x() - t->y() * t->y());
       s.inertia = M_PI / 64.0 * d4;
@@ -551,7 +583,7 @@ class Loader {
           // underflows; any non-zero direction is one.
           const double largest = ax->cwiseAbs().maxCoeff();
           if (!(largest > 0.0))
-            r_.error(s.get("axis"), element, "axis must be a non-zero vector, got [0, 0]");
+            r_.error(s.at("axis"), element, "axis must be a non-zero vector, got [0, 0]");
           else
             j.axis = (*ax / largest).normalized();
         }
@@ -583,7 +615,7 @@ class Loader {
   }
 
   std::optional<lash::Material> material(Section& j, const std::string& key) {
-    if (!j.has(key)) return std::nullopt;  // `j` is the joint merged with its defaults
+    if (!j.has(key) || j.empty_map(key)) return std::nullopt;  // `j`: the joint and its defaults
     const YAML::Node n = j.get(key);
     Section s(r_, n, j.where(), j.element() + " " + key, {"youngs_modulus", "poisson_ratio"});
     lash::Material mat;
@@ -599,7 +631,19 @@ class Loader {
     YAML::Node merged(YAML::NodeType::Map);
     for (const auto& k : kClearanceKeys) {
       const YAML::Node v = param(s, k);
-      if (v.IsDefined()) merged[k] = v;
+      if (!v.IsDefined()) continue;
+      // The key node itself where the value is empty, so that a problem with it is reported
+      // at the key (in the joint or in clearance_defaults), the only place it has.
+      bool placed = false;
+      if (v.IsNull())
+        for (const YAML::Node& map : {s.node(), defaults_})
+          if (!placed && map.IsDefined() && map.IsMap() && map[k].IsDefined())
+            for (const auto& kv : map)
+              if (!placed && kv.first.as<std::string>("") == k) {
+                merged.force_insert(kv.first, v);
+                placed = true;
+              }
+      if (!placed) merged[k] = v;
     }
     // Geometry: when the joint itself gives two of the three, the defaults do not take part.
     const int own_geometry = s.has("clearance") + s.has("journal_radius") + s.has("bearing_radius");
@@ -622,7 +666,7 @@ class Loader {
       cl.journal_radius = *rj;
       cl.bearing_radius = *rj + *clearance;
       if (rb && std::abs(*rb - cl.bearing_radius) > 1e-12) {
-        r_.error(c.get("bearing_radius"), s.element(),
+        r_.error(c.at("bearing_radius"), s.element(),
                  "bearing_radius " + fmt_num(*rb) + " disagrees with journal_radius + clearance = " +
                      fmt_num(cl.bearing_radius) + "; give two of the three");
       }
@@ -641,7 +685,7 @@ class Loader {
       return;
     }
     // At the clearance's value where it has one (an override's is said to be one), else the joint.
-    const YAML::Node at = c.has("clearance") ? c.get("clearance") : s.where();
+    const YAML::Node at = c.has("clearance") ? c.at("clearance") : s.where();
     if (!(cl.clearance > 0) || !(cl.journal_radius > 0)) {
       r_.error(at, s.element(),
                "clearance must be > 0 and smaller than the bearing radius, got clearance " +
@@ -665,7 +709,7 @@ class Loader {
       std::vector<std::string> names;
       for (const auto& i : kNormalLaws) names.emplace_back(i.name);
       const std::string near = closest_match(law, names);
-      r_.error(c.get("normal_law"), s.element(),
+      r_.error(c.at("normal_law"), s.element(),
                "unknown normal_law '" + law + "', expected one of: " + join(names) +
                    (near.empty() ? "" : " (did you mean '" + near + "'?)"));
     }
@@ -678,13 +722,16 @@ class Loader {
       auto mb = material(c, "bearing_material");
       if (!mj) mj = common;
       if (!mb) mb = common;
-      if (!mj || !mb) {
+      bool empty = false;  // an empty material: already reported
+      for (const char* k : {"material", "journal_material", "bearing_material"})
+        empty = empty || (c.get(k).IsDefined() && c.get(k).IsNull());
+      if ((!mj || !mb) && !empty) {
         r_.error(s.where(), s.element(),
                  "give the contact 'stiffness' or a 'material' {youngs_modulus, poisson_ratio} "
                  "(here or in clearance_defaults)");
       } else if (cl.contact.exponent != 1.5) {
         // The materials' K is in N/m^1.5: used with another n it was a wrong force, silently.
-        r_.error(c.has("exponent") ? c.get("exponent") : s.where(), s.element(),
+        r_.error(c.has("exponent") ? c.at("exponent") : s.where(), s.element(),
                  "exponent " + shortest_number(cl.contact.exponent) +
                      " needs the contact 'stiffness' (N/m^exponent): the stiffness derived from "
                      "the materials is Hertz's, in N/m^1.5, for exponent 1.5 only");
@@ -711,7 +758,7 @@ class Loader {
   }
 
   void read_friction(Section& c, const std::string& element, Clearance& cl) {
-    if (!c.has("friction")) return;
+    if (!c.has("friction") || c.empty_map("friction")) return;
     Section f(r_, c.get("friction"), c.where(), element + " friction",
               {"law", "mu", "v0", "v1", "mu_static", "mu_dynamic", "v_static", "v_dynamic",
                "sigma0", "sigma1", "sigma2", "v_stribeck", "v_damping"});
@@ -721,7 +768,7 @@ class Loader {
       std::vector<std::string> names;
       for (const auto& i : kFrictionLaws) names.emplace_back(i.name);
       const std::string near = closest_match(law, names);
-      r_.error(f.get("law"), f.element(),
+      r_.error(f.at("law"), f.element(),
                "unknown friction law '" + law + "', expected one of: " + join(names) +
                    (near.empty() ? "" : " (did you mean '" + near + "'?)"));
       return;
@@ -736,7 +783,7 @@ class Loader {
         p.v0 = f.required_number("v0", " (m/s)", non_negative, 0);
         p.v1 = f.required_number("v1", " (m/s)", positive, 1);
         if (p.v1 <= p.v0)
-          r_.error(f.get("v1"), f.element(), "v1 must be > v0, got v0 = " + fmt_num(p.v0) +
+          r_.error(f.at("v1"), f.element(), "v1 must be > v0, got v0 = " + fmt_num(p.v0) +
                                                  ", v1 = " + fmt_num(p.v1));
         break;
       case FrictionLaw::adams_stepped:
@@ -745,7 +792,7 @@ class Loader {
         p.v_static = f.required_number("v_static", " (m/s)", positive, 1e-4);
         p.v_dynamic = f.required_number("v_dynamic", " (m/s)", positive, 1e-2);
         if (p.v_dynamic <= p.v_static)
-          r_.error(f.get("v_dynamic"), f.element(),
+          r_.error(f.at("v_dynamic"), f.element(),
                    "v_dynamic must be > v_static, got v_static = " + fmt_num(p.v_static) +
                        ", v_dynamic = " + fmt_num(p.v_dynamic));
         break;
@@ -759,7 +806,7 @@ class Loader {
         g.v_stribeck = f.required_number("v_stribeck", " (m/s)", positive, 1e-3);
         g.v_damping = f.number("v_damping", " (m/s)", non_negative).value_or(0.0);
         if (g.mu_static < g.mu_dynamic)
-          r_.error(f.get("mu_static"), f.element(), "mu_static must be >= mu_dynamic, got " +
+          r_.error(f.at("mu_static"), f.element(), "mu_static must be >= mu_dynamic, got " +
                                                         fmt_num(g.mu_static) + " < " + fmt_num(g.mu_dynamic));
         break;
       }
@@ -803,7 +850,7 @@ class Loader {
         const auto b = body_ref(s, s.get("body"));
         if (!b) continue;
         if (*b == kGround) {
-          r_.error(s.get("body"), s.element(), "the ground cannot be driven");
+          r_.error(s.at("body"), s.element(), "the ground cannot be driven");
           continue;
         }
         d.body = *b;
@@ -812,12 +859,12 @@ class Loader {
         else if (coord == "y") d.coordinate = BodyCoordinate::y;
         else if (coord == "phi") d.coordinate = BodyCoordinate::phi;
         else {
-          r_.error(s.get("coordinate"), s.element(),
+          r_.error(s.at("coordinate"), s.element(),
                    "unknown coordinate '" + coord + "', expected one of: x, y, phi");
           continue;
         }
         if (d.coordinate == BodyCoordinate::phi && !m.bodies[d.body].rotates()) {
-          r_.error(s.get("body"), s.element(),
+          r_.error(s.at("body"), s.element(),
                    "body '" + m.bodies[d.body].name +
                        "' is a point mass (no inertia): it has no angle to drive; give "
                        "coordinate: x or y");
@@ -825,7 +872,7 @@ class Loader {
         }
       } else {
         if (s.has("coordinate"))
-          r_.error(s.get("coordinate"), s.element(), "'coordinate' goes with 'body', not 'joint'");
+          r_.error(s.at("coordinate"), s.element(), "'coordinate' goes with 'body', not 'joint'");
         const auto joint = s.text("joint");
         if (!joint) continue;
         std::vector<std::string> names;
@@ -835,7 +882,7 @@ class Loader {
         }
         if (d.joint < 0) {
           const std::string near = closest_match(*joint, names);
-          r_.error(s.get("joint"), s.element(),
+          r_.error(s.at("joint"), s.element(),
                    "unknown joint '" + *joint + "'" +
                        (near.empty() ? "" : ", did you mean '" + near + "'?"));
           continue;
@@ -843,7 +890,7 @@ class Loader {
         const Joint& j = m.joints[d.joint];
         if ((j.type != JointType::revolute && j.type != JointType::translational) ||
             j.clearance) {
-          r_.error(s.get("joint"), s.element(),
+          r_.error(s.at("joint"), s.element(),
                    "joint '" + *joint + "' is " +
                        (j.clearance ? std::string("a clearance joint") : "not revolute or translational") +
                        ", expected an ideal revolute or translational joint; to drive a body "
@@ -865,10 +912,10 @@ class Loader {
         if (!err.empty() && check_expression(text, body_names_).empty())
           err = "a prescribed motion must be a function of time only";
         if (err.empty()) err = check_expression(text, {}, derivatives);
-        if (!err.empty()) r_.error(s.get(key), s.element(), "bad expression in '" + key + "': " + err);
+        if (!err.empty()) r_.error(s.at(key), s.element(), "bad expression in '" + key + "': " + err);
       };
       if (auto rpm = s.number("speed_rpm", " (rev/min)")) {
-        if (!rotary) r_.error(s.get("speed_rpm"), s.element(), "speed_rpm needs an angle to drive");
+        if (!rotary) r_.error(s.at("speed_rpm"), s.element(), "speed_rpm needs an angle to drive");
         d.speed = *rpm * 2.0 * M_PI / 60.0;
       }
       if (s.has("speed")) {
@@ -915,13 +962,13 @@ class Loader {
       auto expr = [&](Section& s, const std::string& key, std::string& out) {
         if (!s.has(key)) return;
         if (!s.get(key).IsScalar()) {
-          r_.error(s.get(key), element, "'" + key + "' must be a number or an expression (text), got " +
+          r_.error(s.at(key), element, "'" + key + "' must be a number or an expression (text), got " +
                                             Section::kind(s.get(key)));
           return;
         }
         out = s.get(key).Scalar();
         const std::string err = check_expression(out, body_names_);
-        if (!err.empty()) r_.error(s.get(key), element, "bad expression in '" + key + "': " + err);
+        if (!err.empty()) r_.error(s.at(key), element, "bad expression in '" + key + "': " + err);
       };
       if (type == "force") {
         Section s(r_, kv.second, kv.first, element, {"type", "point", "fx", "fy"});
@@ -1039,7 +1086,7 @@ class Loader {
       const auto it = std::find(types.begin(), types.end(), type);
       if (it == types.end()) {
         const std::string near = closest_match(type, types);
-        r_.error(s.has("type") ? s.get("type") : s.where(), element,
+        r_.error(s.has("type") ? s.at("type") : s.where(), element,
                  (type.empty() ? std::string("missing 'type'") : "unknown sensor type '" + type + "'") +
                      ", expected one of: " + join(types) +
                      (near.empty() || type.empty() ? "" : " (did you mean '" + near + "'?)"));
@@ -1048,24 +1095,24 @@ class Loader {
       sn.type = static_cast<SensorType>(it - types.begin());
       if (auto p = point(s, "at")) {
         sn.at = *p;
-        if (p->body == kGround) r_.error(s.get("at"), element, "a sensor must be on a body, not the ground");
+        if (p->body == kGround) r_.error(s.at("at"), element, "a sensor must be on a body, not the ground");
       }
       if (auto ax = s.vec2("axis", " (direction)")) {
-        if (ax->norm() < 1e-12) r_.error(s.get("axis"), element, "axis must be a non-zero vector, got [0, 0]");
+        if (ax->norm() < 1e-12) r_.error(s.at("axis"), element, "axis must be a non-zero vector, got [0, 0]");
         else sn.axis = ax->normalized();
       }
       const std::string frame = s.text("frame").value_or("body");
       if (frame == "ground") sn.body_axis = false;
       else if (frame != "body")
-        r_.error(s.get("frame"), element, "frame must be 'body' (axis turns with the body) or "
+        r_.error(s.at("frame"), element, "frame must be 'body' (axis turns with the body) or "
                                           "'ground', got '" + frame + "'");
       if (s.has("gravity")) {
         bool g;
         if (YAML::convert<bool>::decode(s.get("gravity"), g)) sn.gravity = g;
-        else r_.error(s.get("gravity"), element, "gravity must be true (specific force, as a real "
+        else r_.error(s.at("gravity"), element, "gravity must be true (specific force, as a real "
                                                  "accelerometer reads) or false (kinematic acceleration)");
         if (sn.type != SensorType::accelerometer)
-          r_.error(s.get("gravity"), element, "'gravity' applies to accelerometers only");
+          r_.error(s.at("gravity"), element, "'gravity' applies to accelerometers only");
       }
       sn.mass = s.number("mass", " (kg, added at the sensor's point)", non_negative).value_or(0.0);
       m.sensors.push_back(sn);
@@ -1082,7 +1129,7 @@ class Loader {
       if (*integ == "dopri5") st.integrator = IntegratorKind::dopri5;
       else if (*integ == "bdf" || *integ == "cvode") st.integrator = IntegratorKind::bdf;
       else
-        r_.error(s.get("integrator"), "solver",
+        r_.error(s.at("integrator"), "solver",
                  "unknown integrator '" + *integ + "', expected one of: dopri5, bdf");
     }
     st.rtol = s.number("rtol", "", relative_tolerance).value_or(st.rtol);
@@ -1098,7 +1145,7 @@ class Loader {
       if (*rule == "ideal") st.initial_state = InitialStateRule::ideal;
       else if (*rule == "given") st.initial_state = InitialStateRule::given;
       else
-        r_.error(s.get("initial_state"), "solver",
+        r_.error(s.at("initial_state"), "solver",
                  "unknown initial_state '" + *rule + "', expected one of: ideal, given");
     }
     if (s.has("output_channels")) {
@@ -1130,10 +1177,10 @@ class Loader {
       if (*f == "csv") output_.format = OutputFormat::csv;
       else if (*f == "hdf5") output_.format = OutputFormat::hdf5;
       else
-        r_.error(s.get("output_format"), "solver",
+        r_.error(s.at("output_format"), "solver",
                  "unknown output_format '" + *f + "', expected one of: csv, hdf5");
     }
-    if (s.has("baumgarte")) {
+    if (s.has("baumgarte") && !s.empty_map("baumgarte")) {
       Section b(r_, s.get("baumgarte"), s.where(), "solver baumgarte", {"alpha", "beta"});
       st.baumgarte_alpha = b.number("alpha", " (1/s)", non_negative).value_or(st.baumgarte_alpha);
       st.baumgarte_beta = b.number("beta", " (1/s)", non_negative).value_or(st.baumgarte_beta);
@@ -1143,7 +1190,7 @@ class Loader {
         }))
       st.max_outputs = static_cast<long>(*mo);
     if (st.output_interval > st.end_time) {
-      r_.error(s.get("output_interval"), "solver",
+      r_.error(s.at("output_interval"), "solver",
                "output_interval must be <= end_time, got " + fmt_num(st.output_interval) +
                    " > " + fmt_num(st.end_time));
     } else if (const double n = st.end_time / st.output_interval;
