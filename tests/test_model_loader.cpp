@@ -700,6 +700,16 @@ TEST(ModelLoader, OneMistakeIsOneProblemSayingWhatWasGiven) {
   const Model tiny = load_model_text(with("axis: [1, 0]", "axis: [1e-200, 0]"), "model.yaml").model;
   EXPECT_EQ(big.joints[3].axis, Vec2(1, 0));
   EXPECT_EQ(tiny.joints[3].axis, Vec2(1, 0));
+  // A sensor's too: [1e300, 1e300] was refused as "a non-zero vector" at the sensor, and
+  // [0, 1e-200] as "[0, 0]".
+  for (const char* axis : {"[1e300, 1e300]", "[3e-200, 3e-200]"}) {
+    const Model m = load_model_text(std::string(kGood) + "sensors: {a: {type: accelerometer, at: rod.B, axis: " +
+                                        axis + "}}\n",
+                                    "model.yaml").model;
+    ASSERT_EQ(m.sensors.size(), 1u);
+    EXPECT_NEAR(m.sensors[0].axis.x(), std::sqrt(0.5), 1e-15) << axis;
+    EXPECT_NEAR(m.sensors[0].axis.y(), std::sqrt(0.5), 1e-15) << axis;
+  }
 }
 
 TEST(ModelLoader, NumbersBelowTheSmallestNormalDoubleAreRefused) {

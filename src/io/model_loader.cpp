@@ -187,9 +187,17 @@ class Section {
     if (!has(key)) return std::nullopt;
     const YAML::Node n = node_[key];
     double x, y;
+    if (n.IsSequence() && n.size() == 2 && YAML::convert<double>::decode(n[0], x) &&
+        YAML::convert<double>::decode(n[1], y) && (subnormal(x) || subnormal(y))) {
+      r_.error(at(key), element_, "'" + key + "' is [" + join_scalars(n) + "]: " +
+                                      (subnormal(x) ? n[0] : n[1]).Scalar() +
+                                      " is below the smallest normal double (" +
+                                      fmt_num(std::numeric_limits<double>::min()) +
+                                      "), where arithmetic has lost its precision");
+      return std::nullopt;
+    }
     if (!n.IsSequence() || n.size() != 2 || !YAML::convert<double>::decode(n[0], x) ||
-        !YAML::convert<double>::decode(n[1], y) || !std::isfinite(x) || !std::isfinite(y) ||
-        subnormal(x) || subnormal(y)) {
+        !YAML::convert<double>::decode(n[1], y) || !std::isfinite(x) || !std::isfinite(y)) {
       r_.error(at(key), element_, "'" + key + "' must be a pair of finite numbers [x, y]" + units +
                                 ", got " + (n.IsSequence() ? "[" + join_scalars(n) + "]" : kind(n)));
       return std::nullopt;
@@ -527,6 +535,19 @@ class Loader {
       "stiffness", "exponent", "material", "journal_material", "bearing_material",
       "damping_max", "damping_depth", "friction", "min_impact_velocity"};
 
+  /// An element's `axis`, made a unit vector. Scaled by its largest entry first: [1e200, 1e200]'s
+  /// norm overflows, [1e-200, 0]'s underflows; any non-zero direction is one.
+  std::optional<Vec2> direction(Section& s, const std::string& units) {
+    const auto ax = s.vec2("axis", units);
+    if (!ax) return std::nullopt;
+    const double largest = ax->cwiseAbs().maxCoeff();
+    if (!(largest > 0.0)) {
+      r_.error(s.at("axis"), s.element(), "axis must be a non-zero vector, got [0, 0]");
+      return std::nullopt;
+    }
+    return Vec2((*ax / largest).normalized());
+  }
+
   void read_joints(Model& m, const YAML::Node& n, const YAML::Node& root) {
     if (!n.IsDefined() || n.IsNull()) return;
     if (!n.IsMap()) {
@@ -578,15 +599,7 @@ class Loader {
       } else if (j.type == JointType::translational) {
         a = point(s, "guide");
         b = point(s, "slider");
-        if (auto ax = s.vec2("axis", " (unit vector in the guide's frame)")) {
-          // Scaled by its largest entry first: [1e200, 1e200]'s norm overflows, [1e-200, 0]'s
-          // underflows; any non-zero direction is one.
-          const double largest = ax->cwiseAbs().maxCoeff();
-          if (!(largest > 0.0))
-            r_.error(s.at("axis"), element, "axis must be a non-zero vector, got [0, 0]");
-          else
-            j.axis = (*ax / largest).normalized();
-        }
+        if (auto ax = direction(s, " (unit vector in the guide's frame)")) j.axis = *ax;
       } else if (j.type == JointType::distance) {
         a = point(s, "from");
         b = point(s, "to");
@@ -1097,10 +1110,7 @@ class Loader {
         sn.at = *p;
         if (p->body == kGround) r_.error(s.at("at"), element, "a sensor must be on a body, not the ground");
       }
-      if (auto ax = s.vec2("axis", " (direction)")) {
-        if (ax->norm() < 1e-12) r_.error(s.at("axis"), element, "axis must be a non-zero vector, got [0, 0]");
-        else sn.axis = ax->normalized();
-      }
+      if (auto ax = direction(s, " (direction)")) sn.axis = *ax;
       const std::string frame = s.text("frame").value_or("body");
       if (frame == "ground") sn.body_axis = false;
       else if (frame != "body")
