@@ -443,3 +443,31 @@ solver: {end_time: 0.1, output_interval: 0.001}
   EXPECT_GT(constraint_residual(m, ws, 0.0, y.data()), 4e-3);
   EXPECT_TRUE(drivers_out_of_reach(m, ws, 0.0, y).empty());
 }
+
+TEST(Failure, AChannelBeyondTheRangeOfDoubleStopsTheRunUnwritten) {
+  // A free body at 1e200 m/s: its state is finite, its kinetic energy (1e400 J) is not. The row
+  // was written with energy.kinetic = inf, which the readers of timeseries.csv refuse.
+  const SimRun r = run_text(R"Y(
+gravity: [0, 0]
+bodies:
+  puck: {mass: 1, inertia: 1, position: [0, 0], velocity: [1e200, 0]}
+solver: {end_time: 1e-3, output_interval: 1e-4, initial_state: given}
+)Y");
+  const RunStatus& st = r.result.status;
+  ASSERT_FALSE(st.ok);
+  EXPECT_EQ(st.outcome, RunOutcome::failed);
+  EXPECT_EQ(st.t, 0.0);
+  EXPECT_EQ(st.message.find("channel 'energy.kinetic' is inf at t = 0 s while the state is finite"), 0u)
+      << st.message;
+  EXPECT_TRUE(r.rec->time.empty());  // nothing written
+  // A slower puck runs (the check costs nothing where every channel is finite).
+  const SimRun slow = run_text(R"Y(
+gravity: [0, 0]
+bodies:
+  puck: {mass: 1, inertia: 1, position: [0, 0], velocity: [1e10, 0]}
+solver: {end_time: 1e-3, output_interval: 1e-4, initial_state: given}
+)Y");
+  ASSERT_TRUE(slow.result.status.ok) << slow.result.status.message;
+  EXPECT_EQ(slow.rec->time.size(), 11u);
+  EXPECT_DOUBLE_EQ((*slow.rec)["energy.kinetic"].back(), 0.5e20);
+}

@@ -125,6 +125,11 @@ struct Workspace {
   /// evaluation where its workspace is then observed.
   bool integrating = false;
   bool multipliers_reported = true;  ///< the last evaluation's λ are the reported ones
+  /// Every channel at the output being delivered: simulate computes the row once, to refuse a
+  /// row that is not finite, and channel_values hands it to the observers (the results writer,
+  /// the analyses) while `output_row_y` points at the state it belongs to (null otherwise).
+  std::vector<double> output_row;
+  const double* output_row_y = nullptr;
   /// Choices of the redundant rows tried during the run (each an SVD of Φ_q:
   /// reselect_redundant_rows), made or refused.
   long row_choices = 0;

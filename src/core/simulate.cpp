@@ -204,6 +204,26 @@ RunStatus pulled_apart(const Model& model, Workspace& ws, double t, const Eigen:
   return {false, t, e.element, s.str()};
 }
 
+/// A channel that is not finite at an output whose state is: the element it belongs to (its
+/// name's first part, where that is an element) or else the one fault_element picks.
+RunStatus overflowing_channel(const Model& model, const Workspace& ws, const std::string& channel,
+                              double value, double t) {
+  std::string element = channel.substr(0, channel.find('.'));
+  bool known = false;
+  for (const Body& b : model.bodies) known = known || b.name == element;
+  for (const Joint& j : model.joints) known = known || j.name == element;
+  for (const Driver& d : model.drivers) known = known || d.name == element;
+  for (const Load& l : model.loads) known = known || l.name == element;
+  for (const Sensor& n : model.sensors) known = known || n.name == element;
+  if (!known) element = fault_element(model, ws, -1);
+  std::ostringstream s;
+  s.precision(9);
+  s << "channel '" << channel << "' is " << value << " at t = " << t
+    << " s while the state is finite: a quantity beyond the range of double (a velocity or "
+       "force of about 1e154 or more in SI units); " << describe_contacts(model, ws);
+  return {false, t, element, s.str()};
+}
+
 /// The dense output of the step being reported, evaluated into the run's workspace.
 class DenseProbe final : public StepProbe {
  public:
@@ -788,6 +808,7 @@ RunResult simulate(const Model& model, Workspace& ws, Observer& observer,
   };
   double t_emitted = -std::numeric_limits<double>::infinity();
   EnergyScale energy(ws.ny, t0, y);
+  const std::vector<ChannelInfo> channels = channel_info(model);
   auto emit = [&](double t) -> bool {
     t_emitted = t;
     const bool finite = evaluate_here(t);
@@ -797,8 +818,20 @@ RunResult simulate(const Model& model, Workspace& ws, Observer& observer,
     // rows up to the last finite one (the readers refuse NaN, and a row of NaN shows nothing
     // the message does not say).
     if (!finite) return false;
+    // Nor a row whose state is finite but a channel of it is not: a quantity beyond the range
+    // of double (a state file's velocity of 1e200 m/s squared in energy.kinetic).
+    ws.output_row.resize(channels.size());
+    channel_values(model, ws, y, ws.output_row.data());
+    if (!Eigen::Map<const Eigen::ArrayXd>(ws.output_row.data(), ws.output_row.size()).allFinite())
+      for (size_t i = 0; i < channels.size(); ++i)
+        if (!std::isfinite(ws.output_row[i])) {
+          result.status = overflowing_channel(model, ws, channels[i].name, ws.output_row[i], t);
+          return false;
+        }
     energy.add(ws, y);
+    ws.output_row_y = y.data();
     observer.output(t, y, ws);
+    ws.output_row_y = nullptr;
     ++result.outputs;
     if (ws.constraint_violation > kRunViolationLimit) {
       result.status = pulled_apart(model, ws, t, y);
