@@ -837,6 +837,34 @@ TEST(SweepCli, AFailingRunIsRecordedAndTheRestComplete) {
   fs::remove_all(dir);
 }
 
+TEST(SweepCli, ARunsFolderAndAStudysFolderAreNotOne) {
+  // `lash run` into a study's folder was accepted, and `lash report` then reported the study
+  // alone: the run's results were never reported. Each now refuses the other's folder, and
+  // leaves it as it was.
+  const fs::path dir = temp_dir("mixed");
+  const fs::path study = write_study(dir, "set: {solver.end_time: 0.002}\n"
+                                          "parameters:\n"
+                                          "  joints.rod_slider.clearance: {values: [2.0e-4]}\n"
+                                          "transient: {time: 0.001}\n");
+  Result r = lash_cmd("sweep " + study.string() + " -q -o " + (dir / "study").string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  r = lash_cmd("run " + lash::test::example_path("flores_slider_crank.yaml") + " -q -o " +
+               (dir / "study").string());
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("study.db: this folder holds a study of `lash sweep`"), std::string::npos) << r.out;
+  EXPECT_FALSE(fs::exists(dir / "study" / "summary.json"));
+  EXPECT_FALSE(fs::exists(dir / "study" / "model_resolved.yaml"));
+  r = lash_cmd("run " + lash::test::example_path("flores_slider_crank.yaml") +
+               " -q --set solver.end_time=0.001 -o " + (dir / "run").string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  r = lash_cmd("sweep " + study.string() + " -q -o " + (dir / "run").string());
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("summary.json: this folder holds the results of a run of `lash run`"),
+            std::string::npos) << r.out;
+  EXPECT_FALSE(fs::exists(dir / "run" / "study.db"));
+  fs::remove_all(dir);
+}
+
 TEST(SweepCli, AStudyOfCasesOnlyReportsItsMetricsAsATable) {
   // No numeric parameter to plot against: the report showed the status table only, and none of
   // the metrics runs.csv has. Now a table of them, one row per completed run.

@@ -65,6 +65,12 @@ ResultsWriter::ResultsWriter(const Model& model, const std::string& folder,
   std::error_code ec;
   std::filesystem::create_directories(folder, ec);
   if (ec) throw IoError(folder, "cannot create the output folder: " + ec.message());
+  // A study's folder (lash sweep) is not a run's: its report would be the study's, and a
+  // sweep --resume would find a run's files among its own.
+  if (std::filesystem::exists(folder + "/study.db", ec))
+    throw std::invalid_argument(folder + "/study.db: this folder holds a study of `lash sweep`; "
+                                         "a run's results would mix with it: choose another "
+                                         "output folder");
   // All or nothing: a folder with something in the way is refused before anything is removed.
   for (const bool check_only : {true, false})
     for (const auto& f : run_files())

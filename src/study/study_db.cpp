@@ -425,6 +425,12 @@ StudyFolder::StudyFolder(const std::string& folder, const StudySpec& spec, bool 
     : folder_(folder), runs_(study_runs(spec)) {
   lock_ = std::make_shared<FolderLock>(folder);
   const std::string db = folder + "/study.db";
+  // A run's folder (lash run) is not a study's: `lash report` would report on one of the two.
+  for (const char* f : {"summary.json", "timeseries.csv", "timeseries.h5"})
+    if (std::filesystem::exists(folder + "/" + f))
+      throw std::invalid_argument(folder + "/" + f + ": this folder holds the results of a run of "
+                                  "`lash run`; a study's would mix with them: choose another "
+                                  "output folder");
   if (std::filesystem::exists(db) && !resume)
     throw std::invalid_argument(db + ": this folder holds a study already: add --resume to finish it "
                                      "(runs it holds are kept and not run again), or choose another "
