@@ -1478,6 +1478,19 @@ TEST(Cli, ChannelsSelectTheColumnsTimeAlwaysKept) {
   fs::remove_all(some);
 }
 
+TEST(Cli, AnalysisOfARunWithTimeAloneSaysSo) {
+  // `--channels time` wrote 5001 rows of time alone, and `lash analyze` said "no output row lies
+  // in the window".
+  const fs::path out = temp_dir("channels_time");
+  ASSERT_EQ(run_lash("run " + example() + " -q --set solver.end_time=0.002 --channels time -o " +
+                     out.string()).code, 0);
+  const Result r = run_lash("analyze " + out.string());
+  EXPECT_NE(r.out.find("statistics: the time series holds no channel besides time"), std::string::npos)
+      << r.out;
+  EXPECT_EQ(r.out.find("no output row lies in the window"), std::string::npos) << r.out;
+  fs::remove_all(out);
+}
+
 TEST(Cli, ChannelPatternMatchingNothingIsAnErrorNamingTheClosest) {
   const fs::path dir = temp_dir("channels_bad");
   Result r = run_lash("run " + example() + " -q -o " + dir.string() +

@@ -854,6 +854,11 @@ TEST(SweepCli, ARunsFolderAndAStudysFolderAreNotOne) {
   EXPECT_NE(r.out.find("study.db: this folder holds a study of `lash sweep`"), std::string::npos) << r.out;
   EXPECT_FALSE(fs::exists(dir / "study" / "summary.json"));
   EXPECT_FALSE(fs::exists(dir / "study" / "model_resolved.yaml"));
+  // `lash analyze` of a study's folder points to `lash report` (it stopped at "not a folder
+  // written by `lash run` ").
+  r = lash_cmd("analyze " + (dir / "study").string());
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("it holds a study of `lash sweep`: `lash report "), std::string::npos) << r.out;
   r = lash_cmd("run " + lash::test::example_path("flores_slider_crank.yaml") +
                " -q --set solver.end_time=0.001 -o " + (dir / "run").string());
   ASSERT_EQ(r.code, 0) << r.out;

@@ -324,8 +324,13 @@ int main(int argc, char** argv) {
   if (*report || *analyze) {
     model_path = run_dir + "/model_resolved.yaml";
     if (!std::filesystem::exists(model_path)) {  // before the lock file is made
-      std::cerr << "error: " << model_path << ": missing: not a folder written by `lash run` "
-                << (*report ? "(nor a study folder of `lash sweep`, which holds study.db)" : "") << "\n";
+      std::cerr << "error: " << model_path << ": missing: not a folder written by `lash run`";
+      if (*report)
+        std::cerr << " (nor a study folder of `lash sweep`, which holds study.db)";
+      else if (std::filesystem::exists(run_dir + "/study.db"))
+        std::cerr << "; it holds a study of `lash sweep`: `lash report " << run_dir
+                  << "` writes the study's report, and its runs' analyses are in runs.csv";
+      std::cerr << "\n";
       return kExitBadInput;
     }
     try {

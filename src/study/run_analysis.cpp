@@ -606,6 +606,9 @@ std::string fmt_g(double v) {
 std::string no_statistics(const RunAnalysis& out, const AnalysisOptions& o) {
   const bool extrema_only = !out.statistics.empty() && out.statistics.front().samples == 0;
   if (!out.statistics.empty() && !extrema_only) return "";
+  if (out.series.channels.empty() && !out.series.time.empty())
+    return "statistics: the time series holds no channel besides time (a run with --channels "
+           "time): run again with the channels to analyse";
   std::string why = extrema_only ? "statistics: RMS and crest factor: no output row lies in the window"
                                  : "statistics: no output row lies in the window";
   if (o.stats_t0 > -1e299 || o.stats_t1 < 1e299)
