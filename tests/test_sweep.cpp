@@ -846,7 +846,7 @@ TEST(SweepCli, ARunsFolderAndAStudysFolderAreNotOne) {
                                           "parameters:\n"
                                           "  joints.rod_slider.clearance: {values: [2.0e-4]}\n"
                                           "transient: {time: 0.001}\n");
-  Result r = lash_cmd("sweep " + study.string() + " -q -o " + (dir / "study").string());
+  Result r = lash_cmd("sweep " + study.string() + " -q -j 0 -o " + (dir / "study").string());  // 0: every core
   ASSERT_EQ(r.code, 0) << r.out;
   r = lash_cmd("run " + lash::test::example_path("flores_slider_crank.yaml") + " -q -o " +
                (dir / "study").string());

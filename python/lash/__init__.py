@@ -271,8 +271,10 @@ class Model:
         if markers is not None and not isinstance(markers, Mapping):
             raise TypeError(f"markers: expected a dict of marker name to [x, y] (m, body "
                             f"coordinates), got {_short(markers)} ({type(markers).__name__})")
-        spec = {"mass": mass, "inertia": inertia, "position": _point("position", position),
-                "angle": angle,
+        spec = {"mass": None if mass is None else _real("mass", mass, "a number (kg)"),
+                "inertia": None if inertia is None else _real("inertia", inertia, "a number (kg*m^2)"),
+                "position": _point("position", position),
+                "angle": None if angle is None else _real("angle", angle, "a number (rad)"),
                 "markers": {k: _point(f"marker '{k}'", v) for k, v in (markers or {}).items()} or None}
         spec.update(more)
         return self._add("bodies", name, spec)

@@ -300,8 +300,8 @@ SweepCommand::SweepCommand(CLI::App& app, char** argv) : argv_(argv) {
                          : std::string();
       })
       ->transform([](std::string f) { return lash::folder_name(std::move(f)); });
-  sub_->add_option("-j,--jobs", jobs_, "Runs at once on this machine (default: every core)")
-      ->check(CLI::Range(1, 4096));
+  sub_->add_option("-j,--jobs", jobs_, "Runs at once on this machine (default and 0: every core)")
+      ->check(CLI::Range(0, 4096));
   sub_->add_flag("--resume", resume_,
                  "Finish a study in OUTPUT: only the runs its database does not hold are run");
   sub_->add_flag("-q,--quiet", quiet_, "No progress line and no closing summary");

@@ -408,9 +408,13 @@ def test_builders_check_their_arguments():
     for kwargs, message in [({"position": None}, r"^position: expected a point \[x, y\] \(m\), got None"),
                             ({"markers": {"A": None}}, r"^marker 'A': expected a point"),
                             ({"markers": {"A": 0.1}}, r"^marker 'A': expected a point"),
-                            ({"markers": [("A", [0, 0])]}, r"^markers: expected a dict of marker name")]:
+                            ({"markers": [("A", [0, 0])]}, r"^markers: expected a dict of marker name"),
+                            # Text for a number was written into the model unquoted, as a number.
+                            ({"mass": "1"}, r"^mass: expected a number \(kg\), got '1' \(str\)"),
+                            ({"inertia": "0.1"}, r"^inertia: expected a number"),
+                            ({"angle": True}, r"^angle: expected a number \(rad\), got True")]:
         with pytest.raises(TypeError, match=message):
-            m.add_body("b", mass=1.0, **kwargs)
+            m.add_body("b", **{"mass": 1.0, **kwargs})
     with pytest.raises(TypeError, match=r"^clearance: expected a number \(m\), got None"):
         m.add_clearance_joint("pin", journal="b.O", bearing="ground.O", clearance=None)
     with pytest.raises(TypeError, match=r"^name: expected the model's name"):
