@@ -457,6 +457,15 @@ TEST(State, AClearanceJointsPartThatCannotBeIsRefusedAndAChangedGapIsSaid) {
   Workspace wn(next);
   EXPECT_EQ(resume_problem(next, wn, saved), "");
   EXPECT_TRUE(resume_warnings(next, wn, saved).empty());
+  // The same state under a model of another name (a file edited by hand, or the wrong one):
+  // it runs, and is said.
+  EXPECT_EQ(saved.model, "flores_slider_crank");
+  Model renamed = next;
+  renamed.name = "press";
+  const std::vector<std::string> renamed_said = resume_warnings(renamed, wn, saved);
+  ASSERT_EQ(renamed_said.size(), 1u);
+  EXPECT_EQ(renamed_said[0].find("the continued state was written by model 'flores_slider_crank', "
+                                 "and this is 'press'"), 0u) << renamed_said[0];
   // The slider 5 m away along its guide: the ideal joints hold, the journal cannot be there.
   const int slider = 2;
   State far = saved;

@@ -659,6 +659,10 @@ std::string resume_problem(const Model& model, Workspace& ws, const State& state
 
 std::vector<std::string> resume_warnings(const Model& model, Workspace& ws, const State& state) {
   std::vector<std::string> out;
+  if (!state.model.empty() && state.model != model.name)
+    out.push_back("the continued state was written by model '" + state.model + "', and this is '" +
+                  model.name + "': its coordinates match this model's by name and number, so it "
+                  "runs; check that it is the state you meant");
   for (int c = 0; c < ws.nc && static_cast<int>(state.modes.size()) == ws.nc; ++c) {
     double delta, delta_dot;
     clearance_gap(model, ws, c, state.y.data(), delta, delta_dot);

@@ -28,6 +28,9 @@ struct State {
   /// Per clearance joint, its gap δ (m) when the state was saved, if the state file says
   /// (empty otherwise): continuing under another clearance or geometry is then said.
   std::vector<double> gaps;
+  /// The name of the model that wrote the state, if the state file says ("" otherwise):
+  /// continuing another model's state (the same coordinates by chance) is then said.
+  std::string model;
 };
 
 /// A located contact onset or separation of one clearance joint.

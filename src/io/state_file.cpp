@@ -85,6 +85,7 @@ State read_state(const std::string& path, const Model& model, const Workspace& w
     if (j.contains("step") && !j.at("step").is_number())
       throw fail("'step' must be a number (s), got " + j.at("step").dump().substr(0, 40));
     st.step = j.value("step", 0.0);
+    if (j.contains("model") && j.at("model").is_string()) st.model = j.at("model").get<std::string>();
     if (!std::isfinite(st.step) || st.step < 0)
       throw fail("'step' must be a finite step size >= 0 s, got " + j.at("step").dump());
     const auto names = list_of("names", false).get<std::vector<std::string>>();
