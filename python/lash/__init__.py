@@ -629,6 +629,15 @@ _RUN_KEYWORDS = {"solver.end_time": "t_end", "solver.output_interval": "output_i
 def _run_overrides(t_end: Optional[float], output_interval: Optional[float],
                    integrator: Optional[str], overrides: str | Iterable[str]) -> List[str]:
     extra = _override_list(overrides)
+    # A keyword and an override of this call setting one value: which was meant is not known
+    # (the keyword won, and the override's value was never checked).
+    for name, value, path in (("t_end", t_end, "solver.end_time"),
+                              ("output_interval", output_interval, "solver.output_interval"),
+                              ("integrator", integrator, "solver.integrator")):
+        same = [o for o in extra if o.split("=", 1)[0].strip() == path]
+        if value is not None and same:
+            raise ValueError(f"{name} sets {path}, and so does the override '{same[0]}': give "
+                             f"one of them")
     # Any real number (NumPy's included), checked by value after its type.
     for name, value, path in (("t_end", t_end, "solver.end_time"),
                               ("output_interval", output_interval, "solver.output_interval")):
@@ -707,8 +716,8 @@ def simulate(model: Model | str | os.PathLike, t_end: Optional[float] = None, *,
     its outputs in memory as a `Result`, the same numbers `lash run` writes to timeseries.csv.
 
     output_interval (s) and integrator ("dopri5" or "bdf") override the model's solver
-    settings, `overrides` are more "KEY.PATH=VALUE" strings (a single string is one override);
-    `model` itself is not changed.
+    settings, `overrides` are more "KEY.PATH=VALUE" strings (a single string is one override;
+    one that sets what a keyword given sets is refused); `model` itself is not changed.
     The GIL is released while the engine runs. Ctrl-C (SIGINT) stops the run within one integrator step
     and raises KeyboardInterrupt. A numerical failure does not raise: the result holds the run up
     to the failure and `result.status` says what happened (`result.ok` is False).

@@ -303,6 +303,13 @@ def test_overrides_may_be_one_string():
         lash.simulate(FLORES, t_end=0.0005, overrides=[1e-6])
     with pytest.raises(TypeError, match="list of"):
         lash.simulate(FLORES, t_end=0.0005, overrides=3)
+    # A keyword and an override setting one value: refused (the keyword won unseen, and the
+    # override's "abc" was never checked).
+    with pytest.raises(ValueError, match=r"^t_end sets solver.end_time, and so does the override "
+                                         r"'solver.end_time=abc': give one of them$"):
+        lash.simulate(FLORES, t_end=0.0005, overrides=["solver.end_time=abc"])
+    with pytest.raises(ValueError, match=r"^integrator sets solver.integrator"):
+        lash.simulate(FLORES, t_end=0.0005, integrator="bdf", overrides="solver.integrator=dopri5")
 
 
 def test_messages_name_what_was_passed(tmp_path):
