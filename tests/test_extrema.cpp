@@ -1,5 +1,6 @@
 // Exact extrema (core/extrema.hpp): peaks tracked between outputs on the dense output agree with
 // closed forms the outputs miss, and do not depend on the output interval.
+#include <algorithm>
 #include <cmath>
 #include <map>
 
@@ -312,6 +313,68 @@ TEST(Extrema, TurningPointsBelowTheIntegratorsResolutionAreNotSearched) {
   // A physical peak is still searched inside its step: the slider's acceleration maximum is not
   // a sample's.
   EXPECT_GT(both.tracked.refinements(), 0);
+}
+
+TEST(Extrema, TrackingAFewChannelsFindsTheirExtremaAsTrackingAll) {
+  // A sweep tracks the channels whose metrics it keeps (rod_slider.Fn by default): their
+  // extrema are the ones tracking every channel finds (up to what other channels' searches
+  // sampled on the way, within the resolution), at fewer searches; the others stay unseen.
+  class Both : public Observer {
+   public:
+    Both(const Model& m, std::vector<int> few) : model(m), all(m), some(m, std::move(few)) {
+      values.resize(channel_info(m).size());
+    }
+    void output(double t, const Eigen::VectorXd& y, const Workspace& ws) override {
+      channel_values(model, ws, y, values.data());
+      all.sample(t, values.data());
+      some.sample(t, values.data());
+    }
+    void event(const ContactEvent&, const Workspace&) override {
+      all.restart();
+      some.restart();
+    }
+    bool wants_steps() const override { return true; }
+    void step(double t0, double t1, const Eigen::VectorXd& y, const Workspace& ws,
+              StepProbe& probe) override {
+      all.step(t0, t1, y, ws, probe);
+      ASSERT_TRUE(probe.at_end());
+      some.step(t0, t1, probe.state(), probe.workspace(), probe);
+    }
+    const Model& model;
+    ChannelExtrema all, some;
+    std::vector<double> values;
+  };
+  const Model m = load_model_text(read_file(example_path("flores_slider_crank.yaml")),
+                                  "flores_slider_crank.yaml", {"solver.end_time=0.012"})
+                      .model;
+  const auto info = channel_info(m);
+  auto index = [&](const std::string& name) {
+    for (size_t i = 0; i < info.size(); ++i)
+      if (info[i].name == name) return static_cast<int>(i);
+    throw std::runtime_error("no channel " + name);
+  };
+  const std::vector<int> few = {index("rod_slider.Fn"), index("slider.ax")};
+  Workspace ws(m);
+  Both both(m, few);
+  ASSERT_TRUE(simulate(m, ws, both).status.ok);
+  for (size_t i = 0; i < info.size(); ++i) {
+    SCOPED_TRACE(info[i].name);
+    const ChannelExtremum &a = both.some.extrema()[i], &b = both.all.extrema()[i];
+    if (std::find(few.begin(), few.end(), static_cast<int>(i)) == few.end()) {
+      EXPECT_FALSE(a.seen);
+      continue;
+    }
+    ASSERT_TRUE(a.seen);
+    const double own = std::max(std::abs(b.min), std::abs(b.max));
+    EXPECT_LE(a.max, b.max);
+    EXPECT_GE(a.min, b.min);
+    EXPECT_LE(b.max - a.max, 2 * m.solver.rtol * own);
+    EXPECT_LE(a.min - b.min, 2 * m.solver.rtol * own);
+  }
+  EXPECT_GT(both.some.refinements(), 0);
+  EXPECT_LT(2 * both.some.refinements(), both.all.refinements())
+      << both.some.refinements() << " searches against " << both.all.refinements();
+  EXPECT_THROW(ChannelExtrema(m, {static_cast<int>(info.size())}), std::invalid_argument);
 }
 
 TEST(Extrema, ReactionsPeakWhereTheHandCalculationSaysThroughInLinePositions) {

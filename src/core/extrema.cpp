@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <stdexcept>
 #include <string>
 
 #include <boost/math/tools/minima.hpp>
@@ -34,11 +35,18 @@ double hermite_max(double v0, double d0, double v1, double d1, double h) {
 
 }  // namespace
 
-ChannelExtrema::ChannelExtrema(const Model& model)
-    : model_(model), resolution_(model.solver.rtol), end_(model.solver.end_time), to_(end_) {
+ChannelExtrema::ChannelExtrema(const Model& model, std::vector<int> tracked)
+    : model_(model), tracked_(std::move(tracked)), resolution_(model.solver.rtol),
+      end_(model.solver.end_time), to_(end_) {
   const std::vector<ChannelInfo> info = channel_info(model);
   const size_t n = info.size();
   ext_.assign(n, ChannelExtremum{});
+  if (tracked_.empty())
+    for (size_t i = 0; i < n; ++i) tracked_.push_back(static_cast<int>(i));
+  std::sort(tracked_.begin(), tracked_.end());
+  tracked_.erase(std::unique(tracked_.begin(), tracked_.end()), tracked_.end());
+  if (!tracked_.empty() && (tracked_.front() < 0 || tracked_.back() >= static_cast<int>(n)))
+    throw std::invalid_argument("ChannelExtrema: a tracked channel index is out of range");
   std::vector<std::string> units;
   for (const ChannelInfo& c : info) {
     const auto u = std::find(units.begin(), units.end(), c.unit);
@@ -51,7 +59,7 @@ ChannelExtrema::ChannelExtrema(const Model& model)
 
 void ChannelExtrema::sample(double t, const double* values) {
   if (t < from_ || t > to_) return;
-  for (size_t i = 0; i < ext_.size(); ++i) {
+  for (const int i : tracked_) {
     const double v = values[i];
     ChannelExtremum& e = ext_[i];
     if (!std::isfinite(v)) {
@@ -95,17 +103,17 @@ void ChannelExtrema::step(double t0, double t1, const Eigen::VectorXd& y1, const
   if (!have_slope_ || t0 != t_last_) {
     if (!probe_values(probe, t0, v0_)) return;
     if (!probe_values(probe, t0 + eps, tmp_)) return;
-    for (size_t i = 0; i < v0_.size(); ++i) d0_[i] = (tmp_[i] - v0_[i]) / eps;
+    for (const int i : tracked_) d0_[i] = (tmp_[i] - v0_[i]) / eps;
   }
   // The left slope at t1.
   if (!probe_values(probe, t1 - eps, tmp_)) return;
-  for (size_t i = 0; i < v1_.size(); ++i) d1_[i] = (v1_[i] - tmp_[i]) / eps;
+  for (const int i : tracked_) d1_[i] = (v1_[i] - tmp_[i]) / eps;
   // A slope changing sign: a turning point inside the step, refined where it may matter. The
   // units' largest magnitudes are brought up to date once per step, and only where needed.
   bool scaled = false;
   auto unit_scale = [&](int u) {
     if (!scaled) {
-      for (size_t k = 0; k < ext_.size(); ++k)
+      for (const int k : tracked_)
         if (ext_[k].seen)
           scale_[unit_[k]] =
               std::max({scale_[unit_[k]], std::abs(ext_[k].min), std::abs(ext_[k].max)});
@@ -114,7 +122,7 @@ void ChannelExtrema::step(double t0, double t1, const Eigen::VectorXd& y1, const
     return scale_[u];
   };
   const double res = resolution_;
-  for (size_t i = 0; i < v1_.size(); ++i) {
+  for (const int i : tracked_) {
     const double a = d0_[i], b = d1_[i];
     if (!(std::isfinite(a) && std::isfinite(b))) continue;
     const double own = std::max(std::abs(ext_[i].min), std::abs(ext_[i].max));
@@ -124,7 +132,7 @@ void ChannelExtrema::step(double t0, double t1, const Eigen::VectorXd& y1, const
       const double bulge = est - std::max(sign * v0_[i], sign * v1_[i]);
       const double best = sign > 0 ? ext_[i].max : -ext_[i].min;
       if (est + bulge >= best && bulge > res * own && own > res * unit_scale(unit_[i]))
-        refine(probe, static_cast<int>(i), sign, std::max(t0, from_), std::min(t1, to_),
+        refine(probe, i, sign, std::max(t0, from_), std::min(t1, to_),
                t1 <= to_ ? -sign * v1_[i] : std::numeric_limits<double>::quiet_NaN());
     }
   }

@@ -45,7 +45,11 @@ class ChannelExtrema {
   /// 4τ(s + 1/4) ≤ 2.5e-3 of the step (s ∈ [0, 1], the best point's place in the step).
   static constexpr int kRefineBits = 12;
 
-  explicit ChannelExtrema(const Model& model);
+  /// Tracks every channel, or only those of `tracked` (indices into channel_info; a sweep keeps
+  /// a few): the others stay unseen, and neither their turning points nor their values cost
+  /// anything. A unit's largest magnitude (the resolution test below) is then over the tracked
+  /// channels of that unit.
+  explicit ChannelExtrema(const Model& model, std::vector<int> tracked = {});
 
   /// Only values at times in [from, to] count (default: up to the model's end_time; `to` is
   /// never later). A step across an end samples the end itself and refines inside the window
@@ -80,6 +84,7 @@ class ChannelExtrema {
 
   const Model& model_;
   std::vector<ChannelExtremum> ext_;
+  std::vector<int> tracked_;     ///< the channels tracked, ascending
   std::vector<int> unit_;        ///< per channel: its unit's index into scale_
   std::vector<double> scale_;    ///< per unit: the largest |value| of its channels so far
   double resolution_;            ///< relative; see set_resolution
