@@ -854,7 +854,15 @@ std::map<std::string, ChannelExtremum> extrema_by_name(const Model& model, const
 /// Starts `ext` tracking the exact extrema over the statistics window (a run feeds it).
 void track_window_extrema(std::optional<ChannelExtrema>& ext, const Model& model,
                           const AnalysisOptions& o) {
-  ext.emplace(model);
+  std::vector<int> tracked;
+  if (!o.exact_channels.empty()) {
+    const std::vector<ChannelInfo> info = channel_info(model);
+    for (const std::string& name : o.exact_channels)
+      for (size_t i = 0; i < info.size(); ++i)
+        if (info[i].name == name) tracked.push_back(static_cast<int>(i));
+    if (tracked.empty()) tracked.push_back(0);  // none of them in this model: one, as cheap as any
+  }
+  ext.emplace(model, std::move(tracked));
   ext->set_window(o.stats_t0, o.stats_t1);
 }
 

@@ -40,6 +40,10 @@ struct AnalysisOptions {
   double period = 0.0;
   int discard_periods = 1;          ///< transient periods skipped by sections, spectra, Lyapunov
   std::vector<std::string> fft_channels;   ///< default: translational bodies' ax, each Fn
+  /// The channels whose statistics need their exact extrema (tracked between outputs over the
+  /// window, core/extrema.hpp); the others' min and max are their samples'. Default (empty):
+  /// every channel. A sweep names the channels whose metrics it keeps.
+  std::vector<std::string> exact_channels;
   std::vector<std::pair<std::string, std::string>> phase;  ///< default: each joint's (ex, ey)
   double continuous_contact_time = 0.0;    ///< s; 0: 10% of the period, or 1 ms without one
   size_t display_points = 800;      ///< buckets for decimated series (2 points each)
