@@ -49,6 +49,35 @@ solver: {end_time: 1}
   EXPECT_NEAR(lm.modes[0].damping_ratio, 0.1, 1e-6);
 }
 
+TEST(LinearModes, OverdampedRootsOfADampedLinkAreRealNotModes) {
+  // A steel cantilever (1 m, 20 × 20 mm, 8 elements) with Kelvin–Voigt damping η: each mode's
+  // roots solve s² + ηω_i²s + ω_i² = 0, so ζ_i = ηω_i/2, and every overdamped mode has a slow
+  // root near −1/η. Those clustered roots came out as seven "modes" at 1/(2πη) = 15.9 Hz with
+  // ζ = 1, listed before the first bending mode (16.64 Hz, ζ = 0.523).
+  const Model m = load_model_text(R"Y(
+ground: {markers: {A: [0, 0]}}
+bodies:
+  beam:
+    position: [0.5, 0]
+    markers: {A: [-0.5, 0], B: [0.5, 0]}
+    flexible: {length: 1.0, elements: 8, section: {rectangle: [0.02, 0.02]}, youngs_modulus: 207e9, density: 7800, damping: 0.01}
+joints:
+  clamp: {type: fixed, base: ground.A, attached: beam.A}
+solver: {end_time: 1.0}
+)Y", "cantilever.yaml").model;
+  const LinearModes lm = linear_modes(m);
+  ASSERT_FALSE(lm.modes.empty());
+  // Euler–Bernoulli: ω₁ = 1.8751²·√(EI/(ρA L⁴)), EI = 207e9·0.02⁴/12, ρA = 7800·4e-4.
+  const double w1 = 1.8751040687 * 1.8751040687 * std::sqrt(207e9 * 0.02 * 0.02 * 0.02 * 0.02 / 12 / (7800 * 4e-4));
+  EXPECT_NEAR(lm.modes[0].frequency, w1 / (2 * M_PI), 1e-3 * w1 / (2 * M_PI));
+  EXPECT_NEAR(lm.modes[0].damping_ratio, 0.01 * lm.modes[0].frequency * 2 * M_PI / 2, 1e-3);
+  for (const LinearMode& mode : lm.modes) EXPECT_LT(mode.damping_ratio, 1.0 - kCriticalShare);
+  // The slow roots are real, near −1/η = −100 1/s.
+  int near_slow = 0;
+  for (double r : lm.real_rates) near_slow += std::abs(r + 100.0) < 10.0;
+  EXPECT_GE(near_slow, 5);
+}
+
 TEST(LinearModes, AClampedLinkInTheMechanismHasItsOwnCantileverModes) {
   // examples/spin_up_beam.yaml at rest: the beam clamped to a hub that the driver holds is a
   // cantilever; the mechanism's modes are the mesh's clamped–free ones (beam::modes), computed

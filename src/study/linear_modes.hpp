@@ -24,6 +24,10 @@ struct LinearModes {
   std::vector<double> real_rates; ///< real eigenvalues (1/s): overdamped, static or unstable directions
 };
 
+/// A pair of eigenvalues with a damping ratio ζ ≥ 1 − kCriticalShare (|Im λ| below 4.5 % of
+/// |λ|) is taken as two real ones: critically damped or beyond, to the linearisation's accuracy.
+inline constexpr double kCriticalShare = 1e-3;
+
 /// The mechanism's modes: `model` with every clearance joint made ideal and every driver holding
 /// its coordinate at its initial value, assembled (initial_state) and at rest. The Jacobian of
 /// the right-hand side (central differences) on a basis (n, 0), (0, n) of the tangent space
