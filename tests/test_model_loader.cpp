@@ -200,6 +200,16 @@ TEST(ModelLoader, AKeyLeftEmptyIsAnErrorAtTheKeyNotItsDefault) {
   d = problems(with("joints:\n", "clearance_defaults:\n  min_impact_velocity:\njoints:\n"));
   ASSERT_EQ(d.size(), 1u);
   EXPECT_EQ(d[0].str(), "model.yaml:18:3: joint 'gudgeon': 'min_impact_velocity' must be a number (m/s), got an empty value");
+  // A key the element's law does not read: a material beside the contact stiffness.
+  d = problems(with("    material: {youngs_modulus: 207e9, poisson_ratio: 0.3}",
+                    "    stiffness: 6.6e10\n    material:"));
+  ASSERT_EQ(d.size(), 1u);
+  EXPECT_EQ(d[0].str(), "model.yaml:27:5: joints.gudgeon: 'material' has an empty value: give one, "
+                        "or leave the key out for its default");
+  // An empty body name, at its key.
+  d = problems(with("  motor: {joint: pivot, speed_rpm: 5000}", "  motor: {body: , speed_rpm: 5000}"));
+  ASSERT_EQ(d.size(), 1u);
+  EXPECT_EQ(d[0].str(), "model.yaml:31:11: driver 'motor': 'body' must be a body name, got an empty value");
   // Collections may be empty: a section whose entries are all commented out.
   EXPECT_TRUE(problems(std::string(kGood) + "loads:\n  # spring: {type: spring_damper}\nsensors:\n").empty());
 }

@@ -399,6 +399,15 @@ solver: {end_time: 1.0, output_interval: 0.001}
     EXPECT_EQ(r.rec->time.back(), st.t);
     EXPECT_GT(r.result.max_constraint_violation, 1e-3);
   }
+  // Far from closing (the coupler 0.4 m up, the rocker turned 0.4 rad) at t = 0, where the
+  // driver's angle is reachable: full Gauss–Newton steps overshot with every row and gave up,
+  // while the easier trial without the driver closed, so the driver was blamed.
+  const Model m = load_model_text(yaml, "test.yaml", {}).model;
+  Workspace ws(m);
+  Eigen::VectorXd y = initial_state(m, ws);
+  y[ws.blocks[1].offset + 1] += 0.4;
+  y[ws.blocks[2].offset + 2] += 0.4;
+  EXPECT_TRUE(drivers_out_of_reach(m, ws, 0.0, y).empty());
 }
 
 TEST(Failure, PulledApartNamesADriverOnlyWhereTheJointsCloseWithoutIt) {
@@ -442,6 +451,42 @@ solver: {end_time: 0.1, output_interval: 0.001}
   y[ws.blocks[1].offset + 1] += 5e-3;
   EXPECT_GT(constraint_residual(m, ws, 0.0, y.data()), 4e-3);
   EXPECT_TRUE(drivers_out_of_reach(m, ws, 0.0, y).empty());
+  // Far off (the rod 5 cm up and turned 0.4 rad): full Gauss–Newton steps overshot and gave up
+  // with every row while the easier trial without the driver closed, blaming it.
+  y[ws.blocks[1].offset + 1] += 0.045;
+  y[ws.blocks[1].offset + 2] += 0.4;
+  EXPECT_TRUE(drivers_out_of_reach(m, ws, 0.0, y).empty());
+
+  // Two slider-cranks side by side, the second's slider driven past its reach: that driver
+  // alone is named (every driver was named once the first 16 were tried in vain).
+  const std::string second = R"Y(
+gravity: [0, -9.81]
+ground: {markers: {O: [0, 0], P: [0, 1]}}
+bodies:
+  crank: {mass: 1, inertia: 0.0008333333333333335, position: [0.05, 0.0], angle: 0.0, markers: {O: [-0.05, 0], A: [0.05, 0]}}
+  rod: {mass: 1, inertia: 0.0075, position: [0.2, 0.0], angle: 0.0, markers: {A: [-0.1, 0], B: [0.1, 0]}}
+  slider: {mass: 1, inertia: 0.01, position: [0.3, 0], markers: {O: [0, 0]}}
+  crank2: {mass: 1, inertia: 0.0008333333333333335, position: [0.05, 1.0], angle: 0.0, markers: {O: [-0.05, 0], A: [0.05, 0]}}
+  rod2: {mass: 1, inertia: 0.0075, position: [0.25, 1.0], angle: 0.0, markers: {A: [-0.15, 0], B: [0.15, 0]}}
+  slider2: {mass: 1, inertia: 0.01, position: [0.4, 1.0], markers: {O: [0, 0]}}
+joints:
+  crank_pivot: {type: revolute, journal: crank.O, bearing: ground.O}
+  crank_rod: {type: revolute, journal: crank.A, bearing: rod.A}
+  rod_slider: {type: revolute, journal: rod.B, bearing: slider.O}
+  guide: {type: translational, guide: ground.O, slider: slider.O, axis: [1, 0]}
+  crank_pivot2: {type: revolute, journal: crank2.O, bearing: ground.P}
+  crank_rod2: {type: revolute, journal: crank2.A, bearing: rod2.A}
+  rod_slider2: {type: revolute, journal: rod2.B, bearing: slider2.O}
+  guide2: {type: translational, guide: ground.P, slider: slider2.O, axis: [1, 0]}
+drivers:
+  near: {joint: crank_pivot, speed: 1}
+  push: {joint: guide2, motion: "0.1*sin(2*pi*time)"}
+solver: {end_time: 0.1, output_interval: 0.001}
+)Y";
+  const Model m2 = load_model_text(second, "test.yaml", {}).model;
+  Workspace ws2(m2);
+  const Eigen::VectorXd y2 = initial_state(m2, ws2);
+  EXPECT_EQ(drivers_out_of_reach(m2, ws2, 0.01, y2), std::vector<int>{1});
 }
 
 TEST(Failure, AChannelBeyondTheRangeOfDoubleStopsTheRunUnwritten) {

@@ -179,6 +179,16 @@ def _message_name(filename: str) -> str:
         return filename.encode("utf-8", "backslashreplace").decode("utf-8")
 
 
+def _update(section: dict, spec: Dict[str, Any]) -> None:
+    """`section` updated with `spec`; a value None removes its key (an empty value in a model
+    file is an error, not the default)."""
+    for key, value in spec.items():
+        if value is None:
+            section.pop(key, None)
+        else:
+            section[key] = value
+
+
 # Singular of each model section holding named elements, for messages.
 _ELEMENT_KIND = {"bodies": "body", "joints": "joint", "drivers": "driver", "loads": "load",
                  "sensors": "sensor"}
@@ -295,8 +305,9 @@ class Model:
                                           **spec})
 
     def set_clearance_defaults(self, **spec: Any) -> "Model":
-        """Defaults of every clearance joint (`clearance_defaults`: journal_radius, material, ...)."""
-        self._section("clearance_defaults").update(spec)
+        """Defaults of every clearance joint (`clearance_defaults`: journal_radius, material, ...);
+        a value None removes the key (the model file's default)."""
+        _update(self._section("clearance_defaults"), spec)
         return self
 
     def add_driver(self, name: str, **spec: Any) -> "Model":
@@ -308,8 +319,9 @@ class Model:
         return self._add("loads", name, spec)
 
     def set_solver(self, **spec: Any) -> "Model":
-        """Solver settings: integrator, rtol, atol, end_time, output_interval, initial_state, ..."""
-        self._section("solver").update(spec)
+        """Solver settings: integrator, rtol, atol, end_time, output_interval, initial_state, ...;
+        a value None removes the key (the model file's default)."""
+        _update(self._section("solver"), spec)
         return self
 
     # --- overrides and the compiled model ------------------------------------------------

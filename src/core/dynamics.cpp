@@ -655,44 +655,58 @@ std::vector<int> drivers_out_of_reach(const Model& model, Workspace& ws, double 
   std::vector<int> found;
   if (ws.m == 0 || model.drivers.empty()) return found;
   const int nq = ws.nq;
-  Eigen::VectorXd phi(ws.m), part, yy;
+  Eigen::VectorXd phi(ws.m), part, yy, trial, step;
   Eigen::MatrixXd phi_q(ws.m, nq), part_q;
-  // Gauss–Newton on the rows not left out, from y's positions: do they close (to the 1e-10 that
-  // assembly accepts)? Least squares where they cannot, stopped when it no longer gains.
   std::vector<bool> out(ws.m, false);
+  std::vector<int> rows;
+  // The rows not left out at a configuration: their residual's largest entry and 2-norm.
+  auto residual_at = [&](const Eigen::VectorXd& at, bool with_jacobian, double& norm) {
+    update_kin(ws, at.data());
+    build_constraints(model, ws, t, at.data(), false, phi, phi_q, nullptr, nullptr);
+    for (size_t i = 0; i < rows.size(); ++i) {
+      part[static_cast<Eigen::Index>(i)] = phi[rows[i]];
+      if (with_jacobian) part_q.row(static_cast<Eigen::Index>(i)) = phi_q.row(rows[i]);
+    }
+    norm = part.norm();
+    return part.cwiseAbs().maxCoeff();
+  };
+  // Gauss–Newton with halving steps on the rows not left out, from y's positions: do they close
+  // (to the 1e-10 that assembly accepts)? Least squares where they cannot, stopped when a step
+  // no longer lowers the residual's norm.
   auto close = [&]() {
-    std::vector<int> rows;
+    rows.clear();
     for (int r = 0; r < ws.m; ++r)
       if (!out[r]) rows.push_back(r);
+    if (rows.empty()) return true;
     part.resize(static_cast<Eigen::Index>(rows.size()));
     part_q.resize(part.size(), nq);
     yy = y;
-    double last = std::numeric_limits<double>::infinity();
+    double norm = 0.0;
     for (int it = 0; it < 60; ++it) {
-      update_kin(ws, yy.data());
-      build_constraints(model, ws, t, yy.data(), false, phi, phi_q, nullptr, nullptr);
-      for (size_t i = 0; i < rows.size(); ++i) {
-        part[static_cast<Eigen::Index>(i)] = phi[rows[i]];
-        part_q.row(static_cast<Eigen::Index>(i)) = phi_q.row(rows[i]);
+      if (residual_at(yy, true, norm) < 1e-10) return true;
+      step = Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd>(part_q).solve(part);
+      bool lower = false;
+      for (double a = 1.0; a > 1e-3 && !lower; a *= 0.5) {
+        trial = yy;
+        trial.head(nq) -= a * step;
+        double trial_norm = 0.0;
+        residual_at(trial, false, trial_norm);
+        lower = trial_norm < (1.0 - 1e-4 * a) * norm;
       }
-      const double residual = part.cwiseAbs().maxCoeff();
-      if (residual < 1e-10) return true;
-      if (!(residual < 0.99 * last)) return false;
-      last = residual;
-      yy.head(nq) -= Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd>(part_q).solve(part);
+      if (!lower) return false;
+      yy = trial;
     }
     return false;
   };
   const bool all_close = close();
   for (const int r : ws.row_of_driver) out[r] = true;
   if (!all_close && close()) {
-    // Each driver alone: the joints and the other drivers close without it.
-    for (size_t d = 0; d < model.drivers.size() && d < 16; ++d) {
+    // Each driver alone: the joints and the other drivers close without it. Where no single
+    // one is at fault (only together), none is named.
+    for (size_t d = 0; d < model.drivers.size(); ++d) {
       for (size_t k = 0; k < model.drivers.size(); ++k) out[ws.row_of_driver[k]] = k == d;
       if (close()) found.push_back(static_cast<int>(d));
     }
-    if (found.empty())  // only together: all of them
-      for (size_t d = 0; d < model.drivers.size(); ++d) found.push_back(static_cast<int>(d));
   }
   update_kin(ws, y.data());
   return found;

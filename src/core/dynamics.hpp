@@ -231,12 +231,12 @@ bool project_onto_constraints(const Model& model, Workspace& ws, double t, Eigen
 void project_state(const Model& model, Workspace& ws, double t, Eigen::VectorXd& y);
 
 /// Where the joints and drivers no longer close at (t, y) (a run pulled apart): the drivers
-/// that ask for what the mechanism cannot do. Empty when a configuration near y satisfies every
-/// joint and driver (the run lost it: steps too large for the stabilization), or when the
-/// joints do not close even without the drivers; otherwise the drivers (model order, the first
-/// 16 tried) without any one of which the rest close, or all of them if only leaving out all
-/// closes. Gauss–Newton from y's positions (at most 60 iterations per trial); restores ws's
-/// kinematics to y.
+/// that ask for what the mechanism cannot do, each one without which the joints and the other
+/// drivers close (in model order). Empty when a configuration near y satisfies every joint and
+/// driver (the run lost it: steps too large for the stabilization), when the joints do not
+/// close even without the drivers, or when no single driver is at fault. Gauss–Newton with
+/// halving steps from y's positions (at most 60 iterations per trial: one with every row, one
+/// without the drivers, one without each driver); restores ws's kinematics to y.
 std::vector<int> drivers_out_of_reach(const Model& model, Workspace& ws, double t,
                                       const Eigen::VectorXd& y);
 

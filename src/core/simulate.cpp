@@ -833,9 +833,14 @@ RunResult simulate(const Model& model, Workspace& ws, Observer& observer,
           return false;
         }
     energy.add(ws, y);
-    ws.output_row_y = y.data();
-    observer.output(t, y, ws);
-    ws.output_row_y = nullptr;
+    {
+      struct Delivered {  // the row belongs to this output only, however output() ends
+        Workspace& w;
+        ~Delivered() { w.output_row_y = nullptr; }
+      } delivered{ws};
+      ws.output_row_y = y.data();
+      observer.output(t, y, ws);
+    }
     ++result.outputs;
     if (ws.constraint_violation > kRunViolationLimit) {
       result.status = pulled_apart(model, ws, t, y);

@@ -107,12 +107,14 @@ class Section {
   bool has(const std::string& key) const {
     const YAML::Node n = node_[key];
     if (!n.IsDefined()) return false;
-    if (!n.IsNull()) return true;
-    static const char* const may_be_empty[] = {"ground", "bodies", "joints", "clearance_defaults",
-                                               "drivers", "loads", "sensors", "solver",
-                                               "markers", "output_channels", "description"};
-    return std::none_of(std::begin(may_be_empty), std::end(may_be_empty),
-                        [&](const char* k) { return key == k; });
+    return !n.IsNull() || !may_be_empty(key);
+  }
+  /// Keys whose empty value means an empty collection (or no description).
+  static bool may_be_empty(const std::string& key) {
+    static const char* const keys[] = {"ground", "bodies", "joints", "clearance_defaults",
+                                       "drivers", "loads", "sensors", "solver",
+                                       "markers", "output_channels", "description"};
+    return std::any_of(std::begin(keys), std::end(keys), [&](const char* k) { return key == k; });
   }
   YAML::Node get(const std::string& key) const { return node_[key]; }
   /// A key whose value must be a map (friction, material, flexible, section, baumgarte): true,
@@ -247,6 +249,36 @@ class Loader {
  public:
   Loader(const std::string& file) { r_.file = file; }
 
+  /// Every key left without a value that no reader has reported (one the element's type or law
+  /// does not read: a `material:` beside a contact `stiffness`): an empty value is never the
+  /// default (Section::has).
+  /// Each map once (`seen`: where they start), so that an alias of a map, or an alias inside
+  /// itself, is not walked again.
+  void report_empty(const YAML::Node& map, const std::string& path,
+                    std::set<std::pair<int, int>>* seen = nullptr) {
+    std::set<std::pair<int, int>> own;
+    if (!seen) seen = &own;
+    if (!map.IsMap()) return;
+    if (map.Mark().line >= 0 ? !seen->insert({map.Mark().line, map.Mark().column}).second
+                             : std::count(path.begin(), path.end(), '.') > 32)
+      return;  // walked already (a map set with --set has no place: its depth is bounded)
+    for (const auto& kv : map) {
+      const std::string key = kv.first.as<std::string>("");
+      if (!kv.second.IsNull()) {
+        report_empty(kv.second, path.empty() ? key : path + "." + key, seen);
+        continue;
+      }
+      if (Section::may_be_empty(key)) continue;
+      const YAML::Mark at = kv.first.Mark();
+      const bool said = std::any_of(r_.list.begin(), r_.list.end(), [&](const Diagnostic& d) {
+        return d.line == at.line + 1 && d.column == at.column + 1;
+      });
+      if (!said)
+        r_.error(kv.first, path.empty() ? "model" : path,
+                 "'" + key + "' has an empty value: give one, or leave the key out for its default");
+    }
+  }
+
   /// Where each element read is written (LoadedModel::positions).
   std::map<std::string, std::pair<int, int>> positions() const {
     std::map<std::string, std::pair<int, int>> out;
@@ -274,6 +306,7 @@ class Loader {
     read_loads(m, top.get("loads"));
     read_sensors(m, top.get("sensors"));
     read_solver(m, top.get("solver"), root);
+    report_empty(root, "");
     if (!r_.list.empty()) throw ModelError(r_.list);
     // Derived values and the element kinds' own checks: the same for every source of a model.
     try {
@@ -360,9 +393,11 @@ class Loader {
                  (near.empty() ? "" : " (did you mean '" + near + "'?)"));
     return std::nullopt;
   }
-  std::optional<int> body_ref(Section& s, const YAML::Node& n) {
+  /// The body named by `key` (a body's name, or ground).
+  std::optional<int> body_ref(Section& s, const std::string& key) {
+    const YAML::Node n = s.get(key);
     if (!n.IsScalar()) {
-      r_.error(n, s.element(), "expected a body name, got " + Section::kind(n));
+      r_.error(s.at(key), s.element(), "'" + key + "' must be a body name, got " + Section::kind(n));
       return std::nullopt;
     }
     const int b = body_index(n.Scalar());
@@ -860,7 +895,7 @@ class Loader {
       }
       if (s.has("body")) {
         d.target = DriverTarget::body;
-        const auto b = body_ref(s, s.get("body"));
+        const auto b = body_ref(s, "body");
         if (!b) continue;
         if (*b == kGround) {
           r_.error(s.at("body"), s.element(), "the ground cannot be driven");
@@ -1038,7 +1073,7 @@ class Loader {
         // Axes of the frame body (default: the `from` body); stiffness and damping per axis.
         l.frame_body = a ? a->body : kGround;
         if (s.has("frame"))
-          if (auto fb = body_ref(s, s.get("frame"))) l.frame_body = *fb;
+          if (auto fb = body_ref(s, "frame")) l.frame_body = *fb;
         auto pair = [&](const std::string& key, const char* unit) -> Vec2 {
           if (!s.has(key)) return Vec2::Zero();
           const YAML::Node n = s.get(key);
@@ -1050,7 +1085,7 @@ class Loader {
             return Vec2::Zero();
           }
           if (!n.IsSequence()) {
-            r_.error(n, element, expected + ", got " + Section::kind(n));
+            r_.error(s.at(key), element, expected + ", got " + Section::kind(n));
             return Vec2::Zero();
           }
           if (auto p = s.vec2(key, unit)) {

@@ -422,6 +422,13 @@ def test_builders_check_their_arguments():
                             ({"angle": True}, r"^angle: expected a number \(rad\), got True")]:
         with pytest.raises(TypeError, match=message):
             m.add_body("b", **{"mass": 1.0, **kwargs})
+    # None in the settings' sections removes the key: its default (an empty value in a model
+    # file is an error).
+    m.set_solver(end_time=1.0, rtol=1e-6)
+    m.set_solver(rtol=None)
+    assert m.data["solver"] == {"end_time": 1.0}
+    m.set_clearance_defaults(restitution=0.5, friction=None)
+    assert m.data["clearance_defaults"] == {"restitution": 0.5}
     with pytest.raises(TypeError, match=r"^clearance: expected a number \(m\), got None"):
         m.add_clearance_joint("pin", journal="b.O", bearing="ground.O", clearance=None)
     with pytest.raises(TypeError, match=r"^name: expected the model's name"):
