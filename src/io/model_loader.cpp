@@ -251,9 +251,8 @@ class Loader {
 
   /// Every key left without a value that no reader has reported (one the element's type or law
   /// does not read: a `material:` beside a contact `stiffness`): an empty value is never the
-  /// default (Section::has).
-  /// Each map once (`seen`: where they start), so that an alias of a map, or an alias inside
-  /// itself, is not walked again.
+  /// default (Section::has). Each map is walked once (`seen`: where maps start), so that an
+  /// alias of a map, or an alias inside itself, is not walked again.
   void report_empty(const YAML::Node& map, const std::string& path,
                     std::set<std::pair<int, int>>* seen = nullptr) {
     std::set<std::pair<int, int>> own;
