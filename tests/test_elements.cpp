@@ -423,6 +423,35 @@ TEST(State, AStateOfAnotherModelIsRefusedWithWhatDiffers) {
       EXPECT_NE(std::string(e.what()).find(said), std::string::npos) << e.what();
     }
   }
+  // A key given twice (the JSON library keeps the last one) is refused, at any depth.
+  std::string text = good.dump();
+  for (const auto& [from, to, said] : std::vector<std::tuple<std::string, std::string, std::string>>{
+           {"{", "{\"t\":0.5,", "'t' is given twice"},
+           {"\"modes\":{", "\"modes\":{\"rod_slider\":1,", "'rod_slider' is given twice"}}) {
+    std::string twice = text;
+    twice.replace(twice.find(from), from.size(), to);
+    std::ofstream(path) << twice;
+    try {
+      read_state(path, flores, wf);
+      ADD_FAILURE() << "accepted " << twice;
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find(said), std::string::npos) << e.what();
+    }
+  }
+  // A negative impact velocity (a run writes |δ̇| >= 0 at onset; the force law would floor it
+  // silently) is refused when the run continues.
+  {
+    std::ofstream(path) << good.dump();
+    const State st = read_state(path, flores, wf);
+    Model longer = flores;  // the state is at end_time: continued one more millisecond
+    longer.solver.end_time = 0.002;
+    EXPECT_EQ(resume_problem(longer, wf, st), "");
+    State neg = st;
+    neg.y[wf.aux_impact[0]] = -0.5;
+    const std::string said = resume_problem(longer, wf, neg);
+    EXPECT_NE(said.find("'rod_slider': the state's impact velocity -0.5 m/s is negative"),
+              std::string::npos) << said;
+  }
   nlohmann::json no_t = good;
   no_t.erase("t");
   std::ofstream(path) << no_t.dump();

@@ -516,3 +516,47 @@ solver: {end_time: 1e-3, output_interval: 1e-4, initial_state: given}
   EXPECT_EQ(slow.rec->time.size(), 11u);
   EXPECT_DOUBLE_EQ((*slow.rec)["energy.kinetic"].back(), 0.5e20);
 }
+
+TEST(Stiffness, ARunWhoseStepsStabilitySetsNamesBdf) {
+  // A 1 kg puck released 1 mm from its rest on a 1 N/m spring with a 1e6 N·s/m damper: λ = −c/m
+  // = −1e6 1/s holds DOPRI5 at h ≈ 3.3/|λ| = 3.3e-6 s long after the 1e-6 s transient has
+  // died (Hairer, Nørsett & Wanner II, §IV.2), 15 000 steps for 0.05 s. BDF steps as accuracy
+  // allows, and DOPRI5 on the undamped spring says nothing.
+  const std::string yaml = R"Y(
+gravity: [0, 0]
+bodies:
+  puck: {mass: 1, inertia: 1, position: [0.001, 0], markers: {O: [0, 0]}}
+ground: {markers: {O: [0, 0]}}
+loads:
+  tie: {type: spring_damper, from: ground.O, to: puck.O, stiffness: 1, damping: 1e6, free_length: 0}
+solver: {end_time: 0.05, output_interval: 1e-3, initial_state: given, rtol: 1e-6, atol: 1e-9}
+)Y";
+  const SimRun stiff = run_text(yaml);
+  ASSERT_TRUE(stiff.result.status.ok) << stiff.result.status.message;
+  const IntegratorStats& s = stiff.result.stats;
+  EXPECT_GT(s.steps, 14'000);
+  EXPECT_GT(s.stiff_steps, s.steps * 9 / 10);
+  EXPECT_NEAR(s.stiff_step * 1e6, 3.3, 0.3);  // at the edge of the stability region
+  ASSERT_EQ(stiff.result.warnings.size(), 1u);
+  EXPECT_EQ(stiff.result.warnings[0].find("the model is stiff for dopri5: "), 0u)
+      << stiff.result.warnings[0];
+  EXPECT_NE(stiff.result.warnings[0].find("solver.integrator: bdf"), std::string::npos);
+  const SimRun bdf = run_text(yaml, {"solver.integrator=bdf"});
+  ASSERT_TRUE(bdf.result.status.ok) << bdf.result.status.message;
+  EXPECT_LT(bdf.result.stats.steps, 1000);
+  EXPECT_TRUE(bdf.result.warnings.empty());
+  EXPECT_NEAR((*bdf.rec)["puck.x"].back(), (*stiff.rec)["puck.x"].back(), 1e-8);
+  const SimRun plain = run_text(yaml, {"loads.tie.damping=0"});
+  ASSERT_TRUE(plain.result.status.ok);
+  EXPECT_EQ(plain.result.stats.stiff_steps, 0);
+  EXPECT_TRUE(plain.result.warnings.empty());
+  // The warning needs both: enough stiff steps, and half of the run's.
+  IntegratorStats few;
+  few.steps = 2 * kStiffWarningSteps;
+  few.stiff_steps = kStiffWarningSteps - 1;
+  EXPECT_EQ(stiffness_warning(few, "dopri5"), "");
+  few.stiff_steps = kStiffWarningSteps;
+  EXPECT_NE(stiffness_warning(few, "dopri5"), "");
+  few.steps = 2 * kStiffWarningSteps + 1;
+  EXPECT_EQ(stiffness_warning(few, "dopri5"), "");
+}

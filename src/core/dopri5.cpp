@@ -148,6 +148,16 @@ class Dopri5 final : public Integrator {
         return msg;
       }
       const bool ok = stages(y_, k1_, t_, h);
+      // Stiffness (Hairer, Nørsett & Wanner, Solving ODEs II, §IV.2, eq. 2.27): k7 and k6 are
+      // f at t + h of ynew_ and of the 6th stage's state yt_, so |k7 − k6| / |ynew_ − yt_|
+      // estimates the Jacobian's dominant |λ|; h·|λ| near 3.3 is the edge of DOPRI5's
+      // stability region on the negative real axis. Tested every kStiffEvery steps and at every
+      // step once a test held. yt_ is the error estimate's next.
+      double h_lambda = 0.0;
+      if (ok && (stiff_run_ > 0 || stats_.steps % kStiffEvery == 0)) {
+        const double den = (ynew_ - yt_).squaredNorm();
+        if (den > 0.0) h_lambda = h * std::sqrt((k7_ - k6_).squaredNorm() / den);
+      }
       if (!ok) {  // a stage left the domain: shrink hard and retry
         ++stats_.rejected_steps;
         worst_component_ = -1;  // not known: the right-hand side failed
@@ -177,6 +187,7 @@ class Dopri5 final : public Integrator {
       end_evaluated_ = true;  // k7 = f(t_, y_); a step cut at an event clears it
       ++stats_.steps;
       stats_.last_step = h;
+      count_stiffness(h_lambda);
       h_ = h * std::clamp(fac, 0.2, rejected_last ? 1.0 : 10.0);
       locate_events();
       if (hook_) hook_(t_old_, t_);  // the step, cut at a located event
@@ -193,6 +204,24 @@ class Dopri5 final : public Integrator {
       return stall_.after_step(t_old_, t_, std::max(t_out_, o_.end_time),
                                static_cast<double>(o_.max_steps - stats_.steps));
     }
+  }
+
+  /// Hairer's rule: h·|λ| > 3.25 at 15 tests (no 6 below it in a row between them) starts a
+  /// stiff stretch; 6 tests in a row below it end it. The steps of a stretch, from the one that
+  /// started it, count in stats_.stiff_steps (h·|λ| hovers about the boundary there: rejected
+  /// steps push it above, the controller's growth below).
+  void count_stiffness(double h_lambda) {
+    if (h_lambda > 3.25) {
+      non_stiff_ = 0;
+      if (++stiff_run_ >= 15 && !in_stiff_stretch_) {
+        in_stiff_stretch_ = true;
+        if (stats_.stiff_steps == 0) stats_.stiff_from = t_old_, stats_.stiff_step = h_step_;
+      }
+    } else if (stiff_run_ > 0 && ++non_stiff_ == 6) {
+      stiff_run_ = 0;
+      in_stiff_stretch_ = false;
+    }
+    if (in_stiff_stretch_) ++stats_.stiff_steps;
   }
 
   void dense_at(double t, Eigen::VectorXd& y) override { dense(t, y); }
@@ -351,6 +380,9 @@ class Dopri5 final : public Integrator {
   int diagnosed_ = p_.n_diagnosed > 0 ? p_.n_diagnosed : p_.n;  ///< OdeProblem::n_diagnosed
   bool have_step_ = false, need_k1_ = true, pending_event_ = false, end_evaluated_ = false;
   bool halted_ = false;  ///< p_.halt stopped the run at the last step's end
+  static constexpr long kStiffEvery = 1000;  ///< steps between stiffness tests (Hairer's nstiff)
+  long stiff_run_ = 0, non_stiff_ = 0;       ///< tests above 3.25 / in a row below it
+  bool in_stiff_stretch_ = false;
   Eigen::VectorXd y_, k1_prev_, k1_, k2_, k3_, k4_, k5_, k6_, k7_, yt_, ynew_, r1_, r2_, r3_, r4_, r5_, ye_;
   Eigen::VectorXd g_old_, g_new_, g_tmp_;
   Eigen::VectorXd g_quarter_[3];  ///< the event functions at a step's quarter points

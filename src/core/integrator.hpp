@@ -100,6 +100,11 @@ struct IntegratorStats {
   double last_step = 0.0;
   /// States moved onto the constraints near a singular position (OdeProblem::project).
   long projections = 0;
+  /// DOPRI5's stiffness test (Hairer, Nørsett & Wanner, Solving ODEs II, §IV.2): accepted steps
+  /// taken while the test held, i.e. whose size stability, not accuracy, set (h·|λ| at the
+  /// boundary of the method's stability region); the first such step's time and size.
+  long stiff_steps = 0;
+  double stiff_from = 0.0, stiff_step = 0.0;
 };
 
 /// Outcome of Integrator::advance.

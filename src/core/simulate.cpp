@@ -496,7 +496,6 @@ bool Simulator::advance_to(double t_target, Observer* observer) try {
         const ContactState& cs = ws_.contact[c];
         if (mode_contradicts(cs.in_contact, delta)) {
           clearance_event(model_, ws_, c, y_);
-          if (cs.in_contact) y_[ws_.aux_impact[c]] = std::max(delta_dot, 0.0);
           ++ws_.missed_events;
           if (observer) observer->event({t_, c, cs.in_contact, delta_dot}, ws_);
           fixed = true;
@@ -643,6 +642,12 @@ std::string resume_problem(const Model& model, Workspace& ws, const State& state
     return bad;
   for (int c = 0; c < ws.nc; ++c) {
     const Joint& j = model.joints[ws.clearance_joints[c]];
+    // δ̇⁻ is a speed into the wall (a run writes |δ̇| at onset, >= 0): a negative one was edited.
+    if (const double v = state.y[ws.aux_impact[c]]; v < 0.0) {
+      s << "joint '" << j.name << "': the state's impact velocity " << v
+        << " m/s is negative; it is the speed at which the journal met its bearing's wall, >= 0";
+      return s.str();
+    }
     double delta, delta_dot;
     clearance_gap(model, ws, c, state.y.data(), delta, delta_dot);
     if (delta >= j.clearance->journal_radius) {
@@ -655,6 +660,20 @@ std::string resume_problem(const Model& model, Workspace& ws, const State& state
     }
   }
   return "";
+}
+
+std::string stiffness_warning(const IntegratorStats& stats, const std::string& integrator) {
+  if (stats.stiff_steps < kStiffWarningSteps || 2 * stats.stiff_steps < stats.steps) return "";
+  char msg[600];
+  std::snprintf(msg, sizeof msg,
+                "the model is stiff for %s: %ld of its %ld steps (from t = %.6g s, of about "
+                "%.3g s) had their size set by the method's stability, not by rtol (Hairer's "
+                "stiffness test); solver.integrator: bdf takes steps that accuracy sets (stiff "
+                "elements: a contact's or friction's large damping, LuGre's bristles, a stiff "
+                "bushing or spring)",
+                integrator.c_str(), stats.stiff_steps, stats.steps, stats.stiff_from,
+                stats.stiff_step);
+  return msg;
 }
 
 std::vector<std::string> resume_warnings(const Model& model, Workspace& ws, const State& state) {
@@ -929,6 +948,8 @@ RunResult simulate(const Model& model, Workspace& ws, Observer& observer,
       result.final_state.gaps.push_back(delta);
     }
   result.stats = sim.stats();
+  if (std::string w = stiffness_warning(result.stats, result.integrator); !w.empty())
+    result.warnings.push_back(std::move(w));
   result.missed_events = ws.missed_events;
   result.wall_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();

@@ -210,6 +210,11 @@ std::string resume_problem(const Model& model, Workspace& ws, const State& state
 /// the one saved with the state (the model's clearance or geometry changed since), with the
 /// contact force it then starts with; a mode that contradicts the gap (corrected by resume).
 std::vector<std::string> resume_warnings(const Model& model, Workspace& ws, const State& state);
+/// A run is said to be stiff for its integrator when at least this many steps, and half of all,
+/// were taken while DOPRI5's stiffness test held (IntegratorStats::stiff_steps).
+inline constexpr long kStiffWarningSteps = 10'000;
+/// "" or the warning that a run was stiff for its (explicit) integrator, naming BDF.
+std::string stiffness_warning(const IntegratorStats& stats, const std::string& integrator);
 
 /// Parses "<body>.<x|y|phi|vx|vy|omega>=VALUE[,down]" into a plane; throws
 /// std::invalid_argument naming what is wrong.

@@ -3,6 +3,7 @@
 #include "core/elements/clearance_revolute.hpp"
 #include "io/files.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -54,11 +55,30 @@ State read_state(const std::string& path, const Model& model, const Workspace& w
     throw std::runtime_error(e.what());
   }
   json j;
+  // A key written twice in one object (a file edited by hand) is refused: the JSON library keeps
+  // the last, so the first would be silently ignored.
+  std::vector<std::vector<std::string>> keys;  // per open object, its keys so far
+  std::string twice;
+  const json::parser_callback_t check = [&](int, json::parse_event_t event, json& parsed) {
+    if (event == json::parse_event_t::object_start) keys.emplace_back();
+    else if (event == json::parse_event_t::object_end) keys.pop_back();
+    else if (event == json::parse_event_t::key && !keys.empty()) {
+      const std::string k = parsed.get<std::string>();
+      if (std::find(keys.back().begin(), keys.back().end(), k) != keys.back().end()) {
+        if (twice.empty()) twice = k;
+      } else {
+        keys.back().push_back(k);
+      }
+    }
+    return true;
+  };
   try {
-    j = json::parse(text);
+    j = json::parse(text, check);
   } catch (const json::exception& e) {
     throw fail(std::string("not a valid state file (JSON): ") + e.what());
   }
+  if (!twice.empty())
+    throw fail("'" + twice + "' is given twice in one object (a file edited by hand?); keep one");
   if (!j.is_object() || j.value("format", "") != kFormat)
     throw fail(std::string("not a Lash state file (expected \"format\": \"") + kFormat + "\")");
   State st;

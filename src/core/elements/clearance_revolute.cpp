@@ -81,7 +81,9 @@ double clearance_event(const Model& model, Workspace& ws, int k, Eigen::VectorXd
   ContactState& cs = ws.contact[k];
   cs.in_contact = !cs.in_contact;
   if (cs.in_contact) {
-    y[ws.aux_impact[k]] = delta_dot;
+    // δ̇⁻ >= 0 (a grazing onset may locate a δ̇ a rounding below 0; the force law floors it at
+    // min_impact_velocity either way), so a state file never holds a negative one.
+    y[ws.aux_impact[k]] = std::max(delta_dot, 0.0);
     if (ws.aux_bristle[k] >= 0) y[ws.aux_bristle[k]] = 0.0;
   }
   return delta_dot;
