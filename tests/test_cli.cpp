@@ -112,7 +112,7 @@ TEST(Cli, CheckAcceptsTheExamples) {
     }
   EXPECT_GE(n, 5);
   const Result tmd = run_lash("check " + lash::test::example_path("tmd_slider_crank.yaml"));
-  EXPECT_NE(tmd.out.find("ok: 4 bodies, 4 joints (1 with clearance), 1 drivers, 1 loads"),
+  EXPECT_NE(tmd.out.find("ok: 4 bodies, 4 joints (1 with clearance), 1 driver, 1 load"),
             std::string::npos) << tmd.out;
 }
 
@@ -489,7 +489,7 @@ TEST(Cli, TuneAbsorberSnippetLoadsWhenPasted) {
     std::ofstream(file) << model;
     const Result check = run_lash("check " + file.string());
     EXPECT_EQ(check.code, 0) << check.out << "\n" << model;
-    EXPECT_NE(check.out.find("ok: 2 bodies, 1 joints (0 with clearance), 0 drivers, 1 loads"),
+    EXPECT_NE(check.out.find("ok: 2 bodies, 1 joint (0 with clearance), 0 drivers, 1 load"),
               std::string::npos)
         << check.out;
     const Result run = run_lash("run " + file.string() + " -q -o " + (dir / "out").string());

@@ -384,10 +384,15 @@ int main(int argc, char** argv) {
       return 2;
     }
     for (const auto& w : warnings) std::cerr << loaded.located(w, "warning: ") << "\n";
-    std::cout << model_path << ": ok: " << model.bodies.size() << " bodies, "
-              << model.joints.size() << " joints (" << model.clearance_joint_count()
-              << " with clearance), " << model.drivers.size() << " drivers, "
-              << model.loads.size() << " loads, " << model.sensors.size() << " sensors\n";
+    auto count = [](size_t n, const char* one, const char* many) {
+      return std::to_string(n) + " " + (n == 1 ? one : many);
+    };
+    std::cout << model_path << ": ok: " << count(model.bodies.size(), "body", "bodies") << ", "
+              << count(model.joints.size(), "joint", "joints") << " ("
+              << model.clearance_joint_count() << " with clearance), "
+              << count(model.drivers.size(), "driver", "drivers") << ", "
+              << count(model.loads.size(), "load", "loads") << ", "
+              << count(model.sensors.size(), "sensor", "sensors") << "\n";
     return 0;
   }
 
