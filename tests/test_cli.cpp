@@ -259,6 +259,28 @@ TEST(Cli, ProgressLineOnATerminal) {
   fs::remove_all(dir);
 }
 
+TEST(Cli, ProgressLinesInALogEveryIntervalOfWallTime) {
+  // Without a terminal (a log, a batch job) a line every 30 s of wall time: none for a short run
+  // (RunWritesTheResultFiles), one per output at LASH_PROGRESS_SECONDS=0, each on its own line.
+  const fs::path dir = temp_dir("log_progress");
+  const std::string run = " " + std::string(LASH_BINARY) + " run " + example() + " -o " +
+                          dir.string() + " --set solver.end_time=5e-5";
+  const Result r = run_lash_raw("LASH_PROGRESS_SECONDS=0" + run);
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_EQ(r.out.find('\r'), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.rfind("  t = 0 s    0.0%", 0), 0u) << r.out;
+  for (const char* line : {"  t = 2e-05 s   40.0%", "  t = 5e-05 s  100.0%"})
+    EXPECT_NE(r.out.find(std::string("\n") + line), std::string::npos) << line << "\n" << r.out;
+  const Result quiet = run_lash_raw("LASH_PROGRESS_SECONDS=0" + run + " -q");
+  EXPECT_EQ(quiet.out.find("  t = "), std::string::npos) << quiet.out;
+  const Result bad = run_lash_raw("LASH_PROGRESS_SECONDS=-1" + run);
+  EXPECT_EQ(bad.code, 0) << bad.out;
+  EXPECT_NE(bad.out.find("warning: LASH_PROGRESS_SECONDS='-1' is not a number of seconds"),
+            std::string::npos) << bad.out;
+  EXPECT_EQ(bad.out.find("  t = "), std::string::npos) << bad.out;
+  fs::remove_all(dir);
+}
+
 TEST(Cli, AContinuedRunIsNotAnalysedAsAWholeRun) {
   // A folder written with --from holds t >= its start only; analyze and report made the run
   // again from t = 0 and mixed that time into its sections and contact modes.

@@ -28,11 +28,19 @@
 
 namespace {
 
-/// Forwards to the results writer and shows progress on a terminal.
+/// How a run's progress is shown on standard error.
+enum class ProgressMode { none, terminal, log };
+
+/// Forwards to the results writer and shows progress: on a terminal one line rewritten every
+/// 0.2 s; otherwise (a log, a batch job) a line every `log_seconds` of wall time (default 30 s,
+/// the environment's LASH_PROGRESS_SECONDS), so a run shorter than that writes none.
 class ProgressObserver : public lash::Observer {
  public:
   /// `w` may be null (progress only).
-  ProgressObserver(lash::ResultsWriter* w, bool show) : w_(w), show_(show) {}
+  ProgressObserver(lash::ResultsWriter* w, ProgressMode mode, double log_seconds)
+      : w_(w), mode_(mode),
+        log_interval_(std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+            std::chrono::duration<double>(log_seconds))) {}
   void output(double t, const Eigen::VectorXd& y, const lash::Workspace& ws) override {
     if (w_) w_->output(t, y, ws);
     rhs_ = ws.rhs_evaluations;
@@ -47,19 +55,27 @@ class ProgressObserver : public lash::Observer {
     if (w_) w_->step(t0, t1, y, ws, probe);
   }
   void progress(double t, double t_end) override {
-    if (!show_) return;
+    if (mode_ == ProgressMode::none) return;
     const auto now = std::chrono::steady_clock::now();
-    if (now - last_ < std::chrono::milliseconds(200) && t < t_end) return;
+    if (mode_ == ProgressMode::log) {
+      if (now - last_log_ < log_interval_) return;
+      last_log_ = now;
+    } else if (now - last_ < std::chrono::milliseconds(200) && t < t_end) {
+      return;
+    }
     last_ = now;
     const double wall = std::chrono::duration<double>(now - start_).count();
-    fmt::print(stderr, "\r  t = {:.6g} s  {:5.1f}%  {:.3g} simulated s per wall s  {} rhs   ", t,
-               100.0 * t / t_end, wall > 0 ? t / wall : 0.0, rhs_);
-    if (t >= t_end) fmt::print(stderr, "\n");
+    fmt::print(stderr, "{}  t = {:.6g} s  {:5.1f}%  {:.3g} simulated s per wall s  {} rhs{}",
+               mode_ == ProgressMode::terminal ? "\r" : "", t, 100.0 * t / t_end,
+               wall > 0 ? t / wall : 0.0, rhs_, mode_ == ProgressMode::terminal ? "   " : "\n");
+    if (mode_ == ProgressMode::terminal && t >= t_end) fmt::print(stderr, "\n");
   }
 
  private:
   lash::ResultsWriter* w_;
-  bool show_;
+  ProgressMode mode_;
+  std::chrono::steady_clock::duration log_interval_;
+  std::chrono::steady_clock::time_point last_log_ = std::chrono::steady_clock::now();
   long rhs_ = 0;
   std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now(), last_{};
 };
@@ -624,7 +640,22 @@ int main(int argc, char** argv) {
   lash::RunAnalysis ra;
   try {
     lash::Workspace ws(model);
-    ProgressObserver progress(writer.get(), !quiet && isatty(STDERR_FILENO));
+    // A line every 30 s in a log, or every LASH_PROGRESS_SECONDS (>= 0; 0: every output).
+    double log_seconds = 30.0;
+    if (const char* env = std::getenv("LASH_PROGRESS_SECONDS"); env && *env) {
+      char* end = nullptr;
+      const double v = std::strtod(env, &end);
+      if (*end == '\0' && std::isfinite(v) && v >= 0.0 && v <= 1e9)
+        log_seconds = v;
+      else
+        std::cerr << "warning: LASH_PROGRESS_SECONDS='" << env
+                  << "' is not a number of seconds from 0 to 1e9; progress lines every 30 s\n";
+    }
+    ProgressObserver progress(writer.get(),
+                              quiet                   ? ProgressMode::none
+                              : isatty(STDERR_FILENO) ? ProgressMode::terminal
+                                                      : ProgressMode::log,
+                              log_seconds);
     if (with_report) {
       lash::AnalysisOptions ao;
       ao.interrupt = &g_interrupt;
