@@ -65,7 +65,7 @@ class ProgressObserver : public lash::Observer {
     }
     last_ = now;
     const double wall = std::chrono::duration<double>(now - start_).count();
-    fmt::print(stderr, "{}  t = {:.6g} s  {:5.1f}%  {:.3g} simulated s per wall s  {} rhs{}",
+    fmt::print(stderr, "{}  t = {:.6g} s  {:5.1f}%  {:.3g} simulated s per wall s  {} evaluations of the model{}",
                mode_ == ProgressMode::terminal ? "\r" : "", t, 100.0 * t / t_end,
                wall > 0 ? t / wall : 0.0, rhs_, mode_ == ProgressMode::terminal ? "   " : "\n");
     if (mode_ == ProgressMode::terminal && t >= t_end) fmt::print(stderr, "\n");
