@@ -1039,3 +1039,31 @@ TEST(StudyFile, ContinuationLevelsThatStopOrReverseTheDriverAreRefused) {
             std::string::npos) << a;
   EXPECT_NE(a.find("level '-3000' of 'drivers.crank.speed_rpm' turns the driver the other way"), std::string::npos) << a;
 }
+
+TEST(StudyRun, ARunKeepsTheWarningsLashRunWouldPrint) {
+  // A puck on a 1e6 N·s/m damper is stiff for DOPRI5 (tests/test_simulate.cpp): the study's run
+  // says so in its message, completed as it is; the undamped run says nothing.
+  const fs::path dir = temp_dir("warned");
+  fs::create_directories(dir);
+  std::ofstream(dir / "puck.yaml") << R"Y(
+gravity: [0, 0]
+bodies:
+  puck: {mass: 1, inertia: 1, position: [0.001, 0], markers: {O: [0, 0]}}
+ground: {markers: {O: [0, 0]}}
+loads:
+  tie: {type: spring_damper, from: ground.O, to: puck.O, stiffness: 1, damping: 1e6, free_length: 0}
+solver: {end_time: 0.05, output_interval: 1e-3, initial_state: given, rtol: 1e-6, atol: 1e-9}
+)Y";
+  const StudySpec spec = study_text("study: puck\nmodel: " + (dir / "puck.yaml").string() +
+                                    "\nparameters:\n  loads.tie.damping: {values: [1e6, 0]}\n"
+                                    "transient: {time: 0}\nkeep: {channels: [puck.x]}\n");
+  const auto runs = study_runs(spec);
+  ASSERT_EQ(runs.size(), 2u);
+  const RunRecord stiff = run_study_point(spec, runs[0]);
+  EXPECT_EQ(stiff.status, "completed") << stiff.message;
+  EXPECT_EQ(stiff.message.find("warning: the model is stiff for dopri5: "), 0u) << stiff.message;
+  const RunRecord plain = run_study_point(spec, runs[1]);
+  EXPECT_EQ(plain.status, "completed") << plain.message;
+  EXPECT_EQ(plain.message, "");
+  fs::remove_all(dir);
+}

@@ -1015,6 +1015,10 @@ RunRecord run_study_point(const StudySpec& spec, const StudyRun& run, const std:
       for (const auto& c : keep.missing) list += (list.empty() ? "" : ", ") + c;
       rec.message += (rec.message.empty() ? "" : "; ") + std::string("not in this run's model, not kept: ") + list;
     }
+    // What `lash run` would print as warnings (a stiff model for DOPRI5, redundant joints
+    // dropped, the stabilization's work): a study of thousands of runs keeps them per run.
+    for (const std::string& w : res.warnings)
+      rec.message += (rec.message.empty() ? "" : "; ") + std::string("warning: ") + w;
     rec.verdict = ra.verdict.kind;
     // Metrics: the kept channels (default: each clearance joint's Fn), the clearance joints'
     // contact modes, the verdict's numbers; all after the transient.
