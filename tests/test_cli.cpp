@@ -281,6 +281,51 @@ TEST(Cli, ProgressLinesInALogEveryIntervalOfWallTime) {
   fs::remove_all(dir);
 }
 
+TEST(Cli, AReportMadeDuringARunWithChannelsLeftOutEqualsTheFoldersOwn) {
+  // `--channels 'slider.*' --report` analysed every channel (orbits, the Fn spectrum) while
+  // `lash report` of the folder left those out: the two reports of one run differed.
+  const fs::path dir = temp_dir("channels_report");
+  const Result r = run_lash("run " + example() + " -q -o " + dir.string() +
+                            " --channels 'slider.*' --report --set solver.end_time=0.03");
+  ASSERT_EQ(r.code, 0) << r.out;
+  auto load = [&] { return nlohmann::json::parse(std::ifstream(dir / "report_data.json")); };
+  const nlohmann::json in_run = load();
+  const Result again = run_lash("report " + dir.string());
+  ASSERT_EQ(again.code, 0) << again.out;
+  const nlohmann::json folder = load();
+  EXPECT_EQ(in_run["provenance"]["skipped"], folder["provenance"]["skipped"]);
+  bool orbits_said = false;
+  for (const auto& line : in_run["provenance"]["skipped"])
+    orbits_said |= line.get<std::string>().find("journal orbits") == 0;
+  EXPECT_TRUE(orbits_said) << in_run["provenance"].dump();
+  std::vector<std::string> a, b;
+  for (const auto& [k, v] : in_run["series"]["channels"].items()) a.push_back(k);
+  for (const auto& [k, v] : folder["series"]["channels"].items()) b.push_back(k);
+  EXPECT_EQ(a, b);
+  EXPECT_FALSE(in_run["series"]["channels"].contains("rod_slider.Fn"));
+  for (const auto& [k, v] : in_run["analysis"]["statistics"].items())
+    for (const char* f : {"min", "max", "t_min", "t_max"})
+      EXPECT_EQ(v[f], folder["analysis"]["statistics"][k][f]) << k << "." << f;
+  EXPECT_EQ(in_run["model"]["file"], folder["model"]["file"]);
+  fs::remove_all(dir);
+}
+
+TEST(Cli, AStudyFileWhereAModelBelongsIsNamedAsAStudy) {
+  const fs::path dir = temp_dir("study_as_model");
+  fs::create_directories(dir);
+  std::ofstream(dir / "s.yaml") << "study: s\nmodel: " << example()
+                                << "\nparameters:\n  joints.rod_slider.clearance: {values: [1e-4]}\n";
+  for (const char* cmd : {"run", "modes"}) {
+    const Result r = run_lash(std::string(cmd) + " " + (dir / "s.yaml").string() +
+                              (std::string(cmd) == "run" ? " -o " + (dir / "out").string() : ""));
+    EXPECT_EQ(r.code, 2) << r.out;
+    EXPECT_NE(r.out.find("s.yaml is a study (a map with 'study:'), not a model: run it with "
+                         "`lash sweep "), std::string::npos) << cmd << ": " << r.out;
+    EXPECT_EQ(r.out.find("unknown"), std::string::npos) << r.out;
+  }
+  fs::remove_all(dir);
+}
+
 TEST(Cli, AContinuedRunIsNotAnalysedAsAWholeRun) {
   // A folder written with --from holds t >= its start only; analyze and report made the run
   // again from t = 0 and mixed that time into its sections and contact modes.

@@ -114,6 +114,24 @@ TEST(ContactModes, SharesOfAConstructedHistory) {
   // Starting in contact and never separating: all continuous.
   const ModeSummary c = contact_modes({}, {}, {}, true, 0.0, 1.0, 0.05);
   EXPECT_NEAR(c.continuous_share, 1.0, 1e-12);
+  // A window of 0.02 s inside the 0.3 s contact: continuous, no impact (clipped to the window
+  // first, the episode was shorter than 0.05 s and counted as an impact). Windows that cut the
+  // contact at one end only, likewise; the short impact cut by a window stays an impact.
+  const ModeSummary w = contact_modes(t, on, v, true, 0.40, 0.42, 0.05);
+  ASSERT_EQ(w.episodes.size(), 1u);
+  EXPECT_TRUE(w.episodes[0].continuous);
+  EXPECT_EQ(w.impacts, 0);
+  EXPECT_NEAR(w.continuous_share, 1.0, 1e-12);
+  EXPECT_EQ(w.impact_share, 0.0);
+  EXPECT_TRUE(contact_modes(t, on, v, true, 0.58, 0.7, 0.05).episodes[0].continuous);
+  const ModeSummary head = contact_modes(t, on, v, false, 0.29, 0.31, 0.05);
+  ASSERT_EQ(head.episodes.size(), 1u);
+  EXPECT_TRUE(head.episodes[0].continuous);
+  EXPECT_EQ(head.impacts, 1);
+  const ModeSummary cut = contact_modes(t, on, v, true, 0.105, 0.2, 0.05);
+  ASSERT_EQ(cut.episodes.size(), 1u);
+  EXPECT_FALSE(cut.episodes[0].continuous);
+  EXPECT_NEAR(cut.impact_share, 0.005 / 0.095, 1e-12);
 }
 
 TEST(Verdict, WeighsTheEvidence) {

@@ -341,6 +341,25 @@ TEST(RunFolder, SectionsBetweenOutputsAgreeWithThoseTheIntegratorLocated) {
   }
 }
 
+TEST(RunFolder, SectionsOfARunWithTooFewOutputsToEstimateAreMadeAgain) {
+  // Three outputs (0, 0.03, 0.06 s) for five sections: no second interpolant to estimate the
+  // error with. They were kept, "estimated error 0 m", hundreds of µm from the located ones.
+  const fs::path dir = temp_dir("strobe_few");
+  lash::AnalysisOptions o;
+  o.lyapunov = false;
+  o.ideal_twin = false;
+  const lash::RunAnalysis in_run =
+      run_into(dir, {"solver.end_time=0.06", "solver.output_interval=0.03"}, o);
+  const lash::RunAnalysis files = from_folder(dir, o);
+  ASSERT_TRUE(in_run.poincare && files.poincare);
+  ASSERT_EQ(files.poincare->points.size(), in_run.poincare->points.size());
+  ASSERT_GT(in_run.poincare->points.size(), 2u);
+  EXPECT_EQ(files.poincare->points, in_run.poincare->points);
+  EXPECT_TRUE(mentions(files.provenance.resimulated,
+                       "the run has fewer than 4 outputs, so no interpolation error can be estimated"));
+  fs::remove_all(dir);
+}
+
 TEST(RunFolder, StatisticsExtremaAreExactOverTheRunAndOverAWindow) {
   // Two revolutions of the Flores example with outputs every 1 ms and every 10 µs. The
   // statistics' min, max and peak are tracked between outputs, so they agree at both output

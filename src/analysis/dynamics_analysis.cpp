@@ -114,8 +114,25 @@ ModeSummary contact_modes(const std::vector<double>& times, const std::vector<bo
   ModeSummary m;
   bool in = in_contact_at_t0;
   double start = t0;
+  // An episode is classified by its whole duration: one under way at t0 began at the last
+  // onset before it, one under way at t1 ends at the first separation after it (where the
+  // events say; else at the window's edge). Clipped first, the middle of a long contact seen
+  // through a short window counted as an impact.
+  auto true_start = [&](double s) {
+    if (s > t0) return s;
+    double from = s;
+    for (size_t i = 0; i < times.size() && times[i] < t0; ++i)
+      if (onset[i]) from = times[i];
+    return from;
+  };
+  auto true_end = [&](double e) {
+    if (e < t1) return e;
+    for (size_t i = 0; i < times.size(); ++i)
+      if (times[i] > t1 && !onset[i]) return times[i];
+    return e;
+  };
   auto close = [&](double end) {
-    ContactEpisode e{start, end, end - start >= continuous_time};
+    ContactEpisode e{start, end, true_end(end) - true_start(start) >= continuous_time};
     m.episodes.push_back(e);
   };
   for (size_t i = 0; i < times.size(); ++i) {

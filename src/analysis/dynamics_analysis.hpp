@@ -62,7 +62,9 @@ struct ModeSummary {
 
 /// Contact episodes from located onsets/separations (time, onset?, velocity) over [t0, t1]:
 /// episodes longer than `continuous_time` are continuous contact (the journal follows the
-/// bearing wall), shorter ones impacts; the rest of the time is free flight.
+/// bearing wall), shorter ones impacts; the rest of the time is free flight. An episode is
+/// classified by its whole duration, which events outside [t0, t1] show (one under way at t0
+/// began at the last onset before it), and counts in the shares with its part inside.
 ModeSummary contact_modes(const std::vector<double>& times, const std::vector<bool>& onset,
                           const std::vector<double>& velocities, bool in_contact_at_t0,
                           double t0, double t1, double continuous_time);

@@ -373,6 +373,13 @@ int main(int argc, char** argv) {
   try {
     loaded = lash::load_model_file(model_path, overrides);
   } catch (const lash::ModelError& e) {
+    // A study file given where a model belongs: said so, not its keys listed as unknown (looked
+    // at only when the file is no model, so a run parses its model once).
+    if (!*report && !*analyze && lash::cli::is_study_file(model_path)) {
+      std::cerr << "error: " << model_path << " is a study (a map with 'study:'), not a model: "
+                << "run it with `lash sweep " << model_path << " -o DIR`, or name its model file\n";
+      return kExitBadInput;
+    }
     return report_model_error(e);
   }
   const lash::Model& model = loaded.model;
@@ -453,7 +460,10 @@ int main(int argc, char** argv) {
         std::cerr << "\ninterrupted by signal " << sig << "; nothing was written\n";
         return kExitInterrupted;
       }
-      const nlohmann::json data = lash::report_data(model, ra);
+      nlohmann::json data = lash::report_data(model, ra);
+      // The model file the run was given, as the report made during the run names it (the
+      // model was loaded from the folder's copy).
+      if (!recorded.model_file.empty()) data["model"]["file"] = recorded.model_file;
       const int code = exit_code(ra.result.status.outcome);
       if (code != kExitOk)
         std::cerr << "the run stopped at t = " << ra.result.status.t
@@ -659,6 +669,13 @@ int main(int argc, char** argv) {
     if (with_report) {
       lash::AnalysisOptions ao;
       ao.interrupt = &g_interrupt;
+      // The report covers what the run writes, as `lash report` of its folder later would.
+      if (!output.channels.empty()) {
+        const std::vector<lash::ChannelInfo> all = lash::channel_info(model);
+        ao.channels.emplace();
+        for (const std::size_t i : lash::select_channels(all, output.channels))
+          ao.channels->push_back(all[i].name);
+      }
       ra = lash::analyze_run(model, ao, &progress);
       result = ra.result;
       writer->add_to_summary("verdict", {{"class", ra.verdict.kind},

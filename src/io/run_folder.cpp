@@ -166,6 +166,9 @@ RecordedRun read_run_folder(const std::string& dir, const Model& model) {
     damaged(model_path + ": differs from the model this run used (summary.json model.resolved): "
                          "edited after the run? It no longer matches the run's results; run the "
                          "edited model with `lash run` instead");
+  // The model file the run was given (report_data's model.file), not its copy in the folder.
+  if (const json& m = sum.at("model"); m.contains("file") && m.at("file").is_string())
+    run.model_file = m.at("file").get<std::string>();
   try {
     const json& st = member(sum, summary_path, "status");
     RunStatus& s = run.result.status;

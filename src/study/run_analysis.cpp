@@ -401,6 +401,8 @@ class SectionInterpolator {
     while (k_ * period_ <= rows_.back().first * (1 + 1e-12)) emit(k_++ * period_);
   }
   double largest_estimate() const { return estimate_; }
+  /// A section fell in a run of fewer than 4 outputs, where no error can be estimated.
+  bool unestimated() const { return unestimated_; }
   /// Sections that fell on an output time (taken from the row, not interpolated), and all.
   long on_outputs() const { return on_outputs_; }
   long sections() const { return k_; }
@@ -426,10 +428,16 @@ class SectionInterpolator {
       }
     const int n = static_cast<int>(rows_.size());
     std::vector<double> p = through(ts, 0, n);
-    if (n == 4)
+    if (n == 4) {
       for (const auto& q : {through(ts, 0, 3), through(ts, 1, 4)})
         for (size_t i = 0; i < p.size(); ++i)
           if (ts >= sa_.t_discard - 1e-12) estimate_ = std::max(estimate_, std::abs(q[i] - p[i]));
+    } else if (ts >= sa_.t_discard - 1e-12) {
+      // A run of fewer than 4 outputs: no second interpolant to compare with, so no estimate;
+      // never kept (the sections are taken again by the integrator).
+      unestimated_ = true;
+      estimate_ = std::numeric_limits<double>::infinity();
+    }
     sa_.section(ts, std::move(p));
   }
   SampleAnalysis& sa_;
@@ -438,6 +446,7 @@ class SectionInterpolator {
   size_t width_;
   long k_ = 0, on_outputs_ = 0;
   double estimate_ = 0.0;
+  bool unestimated_ = false;
   std::vector<std::pair<double, std::vector<double>>> rows_;
 };
 
@@ -815,8 +824,22 @@ std::unique_ptr<Keeper> run_twin(const Model& model, const Model& twin_model,
 
 /// Wires the twin and the spectra's channels into `sa`; a spectrum whose channel is not among
 /// the rows is left out with a note in `skipped`.
-void connect(SampleAnalysis& sa, const Plan& p, const Keeper* twin,
-             std::vector<std::string>* skipped) {
+/// The channels named, as the model declares them (a run's written columns); a name that is no
+/// channel of the model is an error naming `what`.
+std::vector<ChannelInfo> written_columns(const Plan& p, const std::vector<std::string>& names,
+                                         const std::string& what) {
+  std::vector<ChannelInfo> cols;
+  for (const auto& name : names) {
+    const auto it = std::find_if(p.channels.begin(), p.channels.end(),
+                                 [&](const ChannelInfo& c) { return c.name == name; });
+    if (it == p.channels.end())
+      throw std::invalid_argument(what + " '" + name + "' is not a channel of the run's model");
+    cols.push_back(*it);
+  }
+  return cols;
+}
+
+void connect(SampleAnalysis& sa, Plan& p, const Keeper* twin, std::vector<std::string>& skipped) {
   sa.t_discard = p.t_discard;
   if (twin) {
     sa.twin = twin;
@@ -835,11 +858,28 @@ void connect(SampleAnalysis& sa, const Plan& p, const Keeper* twin,
     const int i = sa.index(f);
     if (i >= 0) {
       sa.fft_index.push_back(i);
-    } else if (skipped) {
-      skipped->push_back("spectrum of " + f + ": the channel was not written (lash run --channels)");
+    } else {
+      skipped.push_back("spectrum of " + f + ": the channel was not written (lash run --channels)");
     }
   }
   sa.fft_data.resize(sa.fft_index.size());
+  // What needs channels the run did not write (lash run --channels) is left out and named, the
+  // same during the run and from its folder.
+  if (!sa.missing_pose.empty())
+    skipped.push_back("animation frames: the pose (x, y, phi) of " + sa.missing_pose.front() +
+                      (sa.missing_pose.size() > 1 ? " and others" : "") + " not written");
+  if (!sa.missing_ecc.empty())
+    skipped.push_back("journal orbits" +
+                      std::string(sa.missing_pose.empty() ? " and animation frames" : "") + ": " +
+                      sa.missing_ecc.front() + ".ex/ey not written (lash run --channels)");
+  std::vector<PhasePortrait> kept;
+  for (const auto& ph : p.phase) {
+    if (sa.index(ph.x) >= 0 && sa.index(ph.y) >= 0)
+      kept.push_back(ph);
+    else
+      skipped.push_back("phase portrait " + ph.x + " / " + ph.y + ": not written");
+  }
+  p.phase = std::move(kept);
 }
 
 /// Extrema by channel name: the channels of `model` in `ext`'s order.
@@ -956,9 +996,11 @@ RunAnalysis analyze_samples(const Model& model, const AnalysisOptions& o, Plan& 
       const auto e = exact->find(st.channel);
       if (e != exact->end()) {
         // Between outputs a channel can only reach further than its samples (a NaN sample is
-        // not tracked): the exact extrema include the samples'.
-        if (e->second.min <= c.min) st.min = e->second.min, st.t_min = e->second.t_min;
-        if (e->second.max >= c.max) st.max = e->second.max, st.t_max = e->second.t_max;
+        // not tracked): the exact extrema include the samples'. Taken as they are: a sample read
+        // back from the CSV's 9 digits may lie a rounding beyond them (30.2977414 against
+        // 30.297741356 m/s, and the time of that output instead of the peak's).
+        st.min = e->second.min, st.t_min = e->second.t_min;
+        st.max = e->second.max, st.t_max = e->second.t_max;
         st.exact = true;
       }
     }
@@ -1201,10 +1243,13 @@ RunAnalysis analyze_run(const Model& model, const AnalysisOptions& o, Observer* 
   std::unique_ptr<Keeper> twin =
       run_twin(model, twin_model, o, twin_result, twin_prov, "ideal twin: run beside the main run");
 
-  // The main run, observed.
+  // The main run, observed: every channel, or those the run writes (AnalysisOptions::channels).
   Workspace ws(model);
-  SampleAnalysis sa(model, p.channels, o, p.n_out, p.clearance_joints);
-  connect(sa, p, twin.get(), nullptr);
+  SampleAnalysis sa(model,
+                    o.channels ? written_columns(p, *o.channels, "written channel") : p.channels,
+                    o, p.n_out, p.clearance_joints);
+  std::vector<std::string> unwritten;
+  connect(sa, p, twin.get(), unwritten);
   sa.angle0 = o.stats_angle0;
   sa.angle1 = o.stats_angle1;
   Collector col(model, ws, sa, extra);
@@ -1226,6 +1271,7 @@ RunAnalysis analyze_run(const Model& model, const AnalysisOptions& o, Observer* 
     out.provenance.skipped.push_back(none);
   for (const std::string& line : twin_prov.resimulated) out.provenance.resimulated.push_back(line);
   for (const std::string& line : twin_prov.skipped) out.provenance.skipped.push_back(line);
+  for (std::string& line : unwritten) out.provenance.skipped.push_back(std::move(line));
   if (out.lyapunov && out.lyapunov->estimated)
     out.provenance.resimulated.push_back("Lyapunov exponent: " + lyapunov_provenance(*out.lyapunov) +
                                          " from the run's state at the first section after the "
@@ -1241,16 +1287,7 @@ RunAnalysis analyze_recorded_run(const Model& model, const AnalysisOptions& o, R
   Provenance prov;
   prov.read = run.read;
 
-  // The columns the run wrote, as the model declares them.
-  std::vector<ChannelInfo> cols;
-  for (const auto& name : run.columns) {
-    const auto it = std::find_if(p.channels.begin(), p.channels.end(),
-                                 [&](const ChannelInfo& c) { return c.name == name; });
-    if (it == p.channels.end())
-      throw std::invalid_argument(run.series_file + ": column '" + name +
-                                  "' is not a channel of the run's model");
-    cols.push_back(*it);
-  }
+  const std::vector<ChannelInfo> cols = written_columns(p, run.columns, run.series_file + ": column");
 
   const Model twin_model = ideal_model(model);
   RunResult twin_result;
@@ -1258,24 +1295,9 @@ RunAnalysis analyze_recorded_run(const Model& model, const AnalysisOptions& o, R
                                           "ideal twin: not saved by a run, simulated now");
 
   SampleAnalysis sa(model, cols, o, p.n_out, p.clearance_joints);
-  connect(sa, p, twin.get(), &prov.skipped);
+  connect(sa, p, twin.get(), prov.skipped);
   sa.angle0 = o.stats_angle0;
   sa.angle1 = o.stats_angle1;
-  if (!sa.missing_pose.empty())
-    prov.skipped.push_back("animation frames: the pose (x, y, phi) of " + sa.missing_pose.front() +
-                           (sa.missing_pose.size() > 1 ? " and others" : "") + " not written");
-  if (!sa.missing_ecc.empty())
-    prov.skipped.push_back("journal orbits" +
-                           std::string(sa.missing_pose.empty() ? " and animation frames" : "") +
-                           ": " + sa.missing_ecc.front() + ".ex/ey not written (lash run --channels)");
-  std::vector<PhasePortrait> kept;
-  for (const auto& ph : p.phase) {
-    if (sa.index(ph.x) >= 0 && sa.index(ph.y) >= 0)
-      kept.push_back(ph);
-    else
-      prov.skipped.push_back("phase portrait " + ph.x + " / " + ph.y + ": not written");
-  }
-  p.phase = std::move(kept);
 
   // Contact modes at the start: a joint whose first event is a separation began in contact.
   for (const RecordedEvent& e : run.events) {
@@ -1311,9 +1333,13 @@ RunAnalysis analyze_recorded_run(const Model& model, const AnalysisOptions& o, R
       const double own = 0.01 * model.joints[p.clearance_joints[c]].clearance->clearance;
       tol = c == 0 ? own : std::min(tol, own);
     }
-    const std::string estimate = "estimated interpolation error " + fmt_g(strobe.largest_estimate()) +
-                                 " m, " + (strobe.largest_estimate() <= 0.1 * tol ? "within" : "above") +
-                                 " a tenth of the " + fmt_g(tol) + " m point tolerance";
+    const std::string estimate =
+        strobe.unestimated()
+            ? std::string("the run has fewer than 4 outputs, so no interpolation error can be "
+                          "estimated")
+            : "estimated interpolation error " + fmt_g(strobe.largest_estimate()) + " m, " +
+                  (strobe.largest_estimate() <= 0.1 * tol ? "within" : "above") +
+                  " a tenth of the " + fmt_g(tol) + " m point tolerance";
     if (strobe.largest_estimate() <= 0.1 * tol) {
       const long n = strobe.sections(), exact = strobe.on_outputs();
       prov.read.push_back(exact == n ? "stroboscopic sections: from the outputs (every section "

@@ -44,6 +44,9 @@ struct AnalysisOptions {
   /// window, core/extrema.hpp); the others' min and max are their samples'. Default (empty):
   /// every channel. A sweep names the channels whose metrics it keeps.
   std::vector<std::string> exact_channels;
+  /// The channels the run writes (`lash run --channels`): the analyses of the main run see only
+  /// these, as a report from its folder would, and name what they leave out. None: every one.
+  std::optional<std::vector<std::string>> channels;
   std::vector<std::pair<std::string, std::string>> phase;  ///< default: each joint's (ex, ey)
   double continuous_contact_time = 0.0;    ///< s; 0: 10% of the period, or 1 ms without one
   size_t display_points = 800;      ///< buckets for decimated series (2 points each)
@@ -303,6 +306,7 @@ struct RecordedRun {
   /// Every channel's exact extrema over the whole run, by name (summary.json `channels`).
   std::map<std::string, ChannelExtremum> extrema;
   std::vector<std::string> read;      ///< what was read, as sentences (Provenance::read)
+  std::string model_file;             ///< the model file the run was given (summary.json), or ""
 };
 
 /// The analyses of analyze_run() from what a run wrote instead of running it again: the same
