@@ -417,7 +417,8 @@ TEST(Redundancy, AssemblyThatTurnsABodyFarFromItsPoseIsSaid) {
   const Model m = load_model_text(yaml, "p3.yaml").model;
   Workspace ws(m);
   initial_state(m, ws);
-  ASSERT_EQ(ws.warnings.size(), 2u);
+  ASSERT_EQ(ws.warnings.size(), 3u);  // redundancy, turned, moved (the cranks' centres swung)
+  EXPECT_NE(ws.warnings[2].find("assembly moved it"), std::string::npos) << ws.warnings[2];
   EXPECT_EQ(ws.warnings[1].rfind("body 'crank_", 0), 0u) << ws.warnings[1];
   EXPECT_NE(ws.warnings[1].find("assembly turned it 60 degrees from its given angle"), std::string::npos)
       << ws.warnings[1];
@@ -430,6 +431,31 @@ TEST(Redundancy, AssemblyThatTurnsABodyFarFromItsPoseIsSaid) {
   Workspace we(exact);
   initial_state(exact, we);
   EXPECT_EQ(we.warnings.size(), 1u);
+}
+
+TEST(Redundancy, AssemblyThatMovesABodyFarFromItsPositionIsSaid) {
+  // The Flores slider given at (0.5, 0.1) m: the guide and the rod put it at (0.17, 0), 0.345 m
+  // away in a mechanism 0.51 m across (given positions and markers). Assembly moved it there
+  // silently; the turn warning looked at angles only.
+  const LoadedModel far = load_model_file(example_path("flores_slider_crank.yaml"),
+                                          {"bodies.slider.position=[0.5, 0.1]"});
+  Workspace ws(far.model);
+  const Eigen::VectorXd y = initial_state(far.model, ws);
+  ASSERT_EQ(ws.warnings.size(), 1u);
+  const double moved = std::hypot(0.5 - 0.17, 0.1);
+  char said[120];
+  std::snprintf(said, sizeof said, "body 'slider': assembly moved it %.3g m from its given position",
+                moved);
+  EXPECT_EQ(ws.warnings[0].rfind(said, 0), 0u) << ws.warnings[0];
+  EXPECT_NE(ws.warnings[0].find("more than 10 % of the mechanism's size (0.51 m"), std::string::npos)
+      << ws.warnings[0];
+  EXPECT_NEAR(y[ws.blocks[2].offset], 0.17, 1e-12);
+  // 1 cm off (2 % of 0.51 m): moved without a word, as the examples' rounded poses are.
+  const LoadedModel near = load_model_file(example_path("flores_slider_crank.yaml"),
+                                           {"bodies.slider.position=[0.18, 0]"});
+  Workspace wn(near.model);
+  initial_state(near.model, wn);
+  EXPECT_TRUE(wn.warnings.empty()) << wn.warnings[0];
 }
 
 TEST(Singular, ParallelogramPassesItsInLinePositionsWithBothIntegrators) {

@@ -988,6 +988,53 @@ Eigen::VectorXd initial_state(const Model& model, Workspace& ws) {
       << "positions)";
     ws.warnings.push_back(s.str());
   }
+  // A body (rigid or point mass) that assembly moved far from its given position, against the
+  // mechanism's size: the largest distance between two of the given positions and markers
+  // (ground's origin and the ground points of joints among them). A pose given in the wrong unit or for another configuration (the slider of a
+  // slider-crank given 0.34 m off its guide's reach) was moved there without a word.
+  {
+    std::vector<Vec2> at, extent{Vec2::Zero()};  // given positions; and markers, in the world
+    for (int b = 0; b < ws.nb; ++b) {
+      const Body& body = model.bodies[b];
+      if (body.flexible()) continue;
+      kind_of(body).initial(body, given.data() + ws.blocks[b].offset, nullptr);
+      const int o = ws.blocks[b].offset;
+      at.emplace_back(given[o], given[o + 1]);
+      extent.push_back(at.back());
+      const double phi = body.type == BodyType::rigid ? given[o + 2] : 0.0;
+      for (const Marker& m : body.markers)
+        extent.push_back(at.back() + rotation(phi) * m.s_P_B);
+    }
+    for (const Joint& j : model.joints)  // the ground's points the joints use
+      for (const PointRef* p : {&j.a, &j.b})
+        if (p->body == kGround) extent.push_back(p->s);
+    double size = 0.0;
+    for (size_t i = 0; i < extent.size(); ++i)
+      for (size_t j = i + 1; j < extent.size(); ++j)
+        size = std::max(size, (extent[i] - extent[j]).norm());
+    std::vector<std::pair<double, int>> moved;
+    for (int b = 0, i = 0; b < ws.nb; ++b) {
+      if (model.bodies[b].flexible()) continue;
+      const int o = ws.blocks[b].offset;
+      const double d = (Vec2(y[o], y[o + 1]) - at[i++]).norm();
+      if (d > kAssemblyMoveWarning * size) moved.push_back({d, b});
+    }
+    if (!moved.empty()) {
+      std::stable_sort(moved.begin(), moved.end(),
+                       [](const auto& a, const auto& b) { return a.first > b.first; });
+      std::ostringstream s;
+      s.precision(3);
+      s << "body '" << model.bodies[moved[0].second].name << "': assembly moved it "
+        << moved[0].first << " m from its given position";
+      for (size_t i = 1; i < moved.size(); ++i)
+        s << (i == 1 ? " (and body '" : ", body '") << model.bodies[moved[i].second].name << "' "
+          << moved[i].first << (i + 1 == moved.size() ? " m)" : "");
+      s << ", more than " << 100 * kAssemblyMoveWarning << " % of the mechanism's size ("
+        << size << " m across its given positions and markers), to satisfy every joint and "
+        << "driver; check the poses and their units";
+      ws.warnings.push_back(s.str());
+    }
+  }
   return y;
 }
 
