@@ -265,6 +265,34 @@ TEST(Overrides, ChangeValuesAndSwitchJointsToClearance) {
   EXPECT_EQ(d[0].str(), "--set joints.pin.material.youngs_modulus: no 'joints.pin.material' in the model");
 }
 
+TEST(Overrides, SectionsOfDefaultsAreMadeWhereTheFileHasNone) {
+  // A model that states no solver settings (all but end_time have defaults) takes
+  // --set solver.end_time (Python's t_end): it was "no 'solver' in the model". The same for
+  // clearance_defaults; other sections and deeper paths still need their parents.
+  const std::string text = R"Y(
+ground: {markers: {O: [0, 0]}}
+bodies:
+  bob: {mass: 1, inertia: 1e-6, position: [0.1, -1], markers: {P: [-0.1, 1]}}
+joints:
+  piv: {type: revolute, journal: bob.P, bearing: ground.O}
+)Y";
+  const Model m = load_model_text(text, "bob.yaml", {"solver.end_time=2", "solver.rtol=1e-7"}).model;
+  EXPECT_EQ(m.solver.end_time, 2.0);
+  EXPECT_EQ(m.solver.rtol, 1e-7);
+  EXPECT_NO_THROW(load_model_text(text, "bob.yaml",
+                                  {"solver.end_time=2", "clearance_defaults.restitution=0.5"}));
+  auto d = problems(text, {"solver.bad.key=1"});
+  ASSERT_EQ(d.size(), 1u);
+  EXPECT_EQ(d[0].str(), "--set solver.bad.key: no 'solver.bad' in the model");
+  d = problems(text, {"loads.spring.stiffness=1"});
+  ASSERT_FALSE(d.empty());
+  EXPECT_EQ(d[0].str(), "--set loads.spring.stiffness: no 'loads' in the model");
+  // Without an end time, the model says what it lacks, not the override.
+  d = problems(text, {"solver.rtol=1e-7"});
+  ASSERT_EQ(d.size(), 1u);
+  EXPECT_NE(d[0].str().find("missing required key 'end_time'"), std::string::npos) << d[0].str();
+}
+
 TEST(Overrides, ClearanceZeroMakesTheJointIdeal) {
   const Model m = load_model_text(kGood, "model.yaml", {"joints.gudgeon.clearance=0"}).model;
   EXPECT_EQ(m.clearance_joint_count(), 0);

@@ -1288,7 +1288,9 @@ YAML::Node override_value(const std::string& value) {
   return YAML::Node(value);
 }
 
-/// Applies "a.b.c=value": the parents must exist; the last key may be new.
+/// Applies "a.b.c=value": the parents must exist; the last key may be new. A section made of
+/// settings with defaults (`solver`, `clearance_defaults`) is made where the file has none, so
+/// `--set solver.end_time=1` works on a model that states no solver settings.
 void apply_override(YAML::Node root, const std::string& spec, Reporter& r) {
   const auto eq = spec.find('=');
   if (eq == std::string::npos || eq == 0) {
@@ -1305,6 +1307,9 @@ void apply_override(YAML::Node root, const std::string& spec, Reporter& r) {
   }
   YAML::Node node = root;
   std::string walked;
+  if (keys.size() > 1 && (keys[0] == "solver" || keys[0] == "clearance_defaults") && root.IsMap() &&
+      !root[keys[0]].IsDefined())
+    root[keys[0]] = YAML::Node(YAML::NodeType::Map);
   for (size_t i = 0; i + 1 < keys.size(); ++i) {
     walked += (i ? "." : "") + keys[i];
     if (!node.IsMap() || !node[keys[i]].IsDefined()) {

@@ -320,20 +320,26 @@ def test_messages_name_what_was_passed(tmp_path):
     m.add_driver("d", joint="j", speed_rpm=1)
     with pytest.raises(ValueError, match="^driver 'd' exists already$"):
         m.add_driver("d", joint="j", speed_rpm=1)
+    # A model built in code with no solver settings runs for t_end (it was "no 'solver' in
+    # the model"); without t_end it says what it lacks.
+    bob = lash.Model.new("bob", gravity=[0, -9.81]).add_ground_marker("O", [0, 0])
+    bob.add_body("bob", mass=1, inertia=1e-6, position=[0.1, -1], markers={"P": [-0.1, 1]})
+    bob.add_joint("piv", journal="bob.P", bearing="ground.O")
+    assert lash.simulate(bob, 0.01).time[-1] == pytest.approx(0.01)
+    with pytest.raises(lash.ModelError, match="missing required key 'end_time'"):
+        lash.simulate(bob, output_interval=1e-3)
     # t_end is a keyword argument, not a --set option.
     with pytest.raises(lash.ModelError) as err:
-        lash.simulate(lash.Model.new("x"), 0.01)
-    assert str(err.value) == "t_end (solver.end_time): no 'solver' in the model\n"
-    assert err.value.diagnostics == [("t_end (solver.end_time)", 0, 0, "",
-                                      "no 'solver' in the model")]
-    with pytest.raises(lash.ModelError, match="output_interval \\(solver.output_interval\\)"):
-        lash.simulate(lash.Model.new("x"), output_interval=1e-3)
+        lash.simulate(bob, 0.01, overrides="solver.bad.key=1")
+    assert str(err.value) == "override solver.bad.key: no 'solver.bad' in the model\n"
+    with pytest.raises(lash.ModelError) as err:
+        lash.simulate(FLORES, 0.01, output_interval=0.02)
+    assert str(err.value).endswith("output_interval must be <= end_time, got 0.02 > 0.01 (values "
+                                   "of the argument t_end and the argument output_interval)\n")
     with pytest.raises(lash.ModelError, match=r"unknown integrator 'rk4'.*\(value of the argument "
                        r"integrator\)\n$"):
         lash.simulate(FLORES, t_end=0.0005, integrator="rk4")
     # The caller's own override string keeps its name: an override, not the CLI's --set.
-    with pytest.raises(lash.ModelError, match="^override solver.end_time: no 'solver'"):
-        lash.simulate(lash.Model.new("x"), overrides="solver.end_time=1")
     # A map or a list set in code reaches the model as one (a map was read as a string).
     m = lash.load(FLORES).set("joints.rod_slider.friction", {"law": "coulomb", "mu": 0.1})
     assert "law: coulomb" in m.resolved_yaml()
