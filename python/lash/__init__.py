@@ -353,7 +353,11 @@ class Model:
         """The model loaded and validated by the C++ loader (cached); raises ModelError.
         `keywords` (model path -> argument name) names the overrides a function's keyword
         arguments made after those arguments in the error."""
+        # A loaded file whose data was read or changed in code is loaded from that data written
+        # again: its line numbers are those of Model.text(), not of the file, and it is named so.
         name = _message_name(self.filename)
+        if self._text is None and not self.filename.startswith("<"):
+            name = f"<{name}, edited: lines of Model.text()>"
         text, overrides = self.text(), self.overrides + _override_list(extra_overrides)
         # Python strings may hold lone surrogates (a file name or bytes decoded with
         # surrogateescape); the loader takes UTF-8 text only.

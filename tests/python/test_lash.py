@@ -112,6 +112,16 @@ def test_model_error_carries_file_line_column_like_the_cli(tmp_path):
     assert cli.returncode == 2
     for d in err.value.diagnostics:  # the same sentences as `lash check`
         assert f"{d[0]}:{d[1]}:{d[2]}: {d[3]}: {d[4]}" in cli.stderr
+    # A loaded file changed through `data` is loaded from that data written again: its lines
+    # are those of Model.text(), and the name says so (the file's name with those lines pointed
+    # at a comment, or past the file's end).
+    edited = lash.load(FLORES)
+    edited.data["bodies"]["crank"]["mass"] = -5
+    with pytest.raises(lash.ModelError) as err:
+        edited.check()
+    file, l, column, element, what = err.value.diagnostics[0]
+    assert file == f"<{FLORES}, edited: lines of Model.text()>"
+    assert "mass: -5" in edited.text().splitlines()[l - 1]
 
 
 def test_bad_override_and_bad_arguments():
