@@ -19,6 +19,7 @@
 #include <cstdlib>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <regex>
 #include <sstream>
 #include <stdexcept>
@@ -33,6 +34,7 @@
 #include "io/files.hpp"
 #include "io/model_loader.hpp"
 #include "io/results_writer.hpp"
+#include "io/state_file.hpp"
 #include "study/run_analysis.hpp"
 #include "study/study_db.hpp"
 #include "study/sweep.hpp"
@@ -205,8 +207,55 @@ std::vector<std::string> clearance_joint_names(const lash::Model& m) {
 }
 
 /// lash.simulate's engine: the model's solver settings from t = 0 to end_time.
-py::dict simulate(const CompiledModel& cm) {
+/// The state a run continues from: a final_state.json (a path, as `lash run --from`) or a
+/// Result's final_state dict (time, step, names, y, modes). Checked as `--from` checks it:
+/// std::invalid_argument naming what does not fit.
+lash::State start_state(const lash::Model& model, const py::object& start) {
+  lash::Workspace ws(model);
+  lash::State st;
+  if (py::isinstance<py::str>(start)) {
+    try {
+      st = lash::read_state(start.cast<std::string>(), model, ws);
+    } catch (const std::runtime_error& e) {
+      throw std::invalid_argument(e.what());
+    }
+  } else {
+    const py::dict d = start.cast<py::dict>();
+    for (const char* key : {"time", "y", "names", "modes"})
+      if (!d.contains(key))
+        throw std::invalid_argument(std::string("start: a Result's final_state has '") + key +
+                                    "'; this one has not");
+    st.t = d["time"].cast<double>();
+    st.step = d.contains("step") ? d["step"].cast<double>() : 0.0;
+    const auto names = d["names"].cast<std::vector<std::string>>();
+    const auto y = d["y"].cast<std::vector<double>>();
+    const auto expected = lash::state_names(model, ws);
+    if (names != expected || y.size() != names.size()) {
+      size_t i = 0;
+      while (i < names.size() && i < expected.size() && names[i] == expected[i]) ++i;
+      throw std::invalid_argument(
+          "start: the state does not match the model: entry " + std::to_string(i) + " is '" +
+          (i < names.size() ? names[i] : std::string("(nothing)")) + "' in the state but '" +
+          (i < expected.size() ? expected[i] : std::string("(nothing)")) + "' in the model");
+    }
+    st.y = Eigen::Map<const Eigen::VectorXd>(y.data(), static_cast<Eigen::Index>(y.size()));
+    const py::dict modes = d["modes"].cast<py::dict>();
+    for (const std::string& joint : clearance_joint_names(model)) {
+      if (!modes.contains(joint))
+        throw std::invalid_argument("start: no contact mode for clearance joint '" + joint + "'");
+      st.modes.push_back({modes[py::str(joint)].cast<bool>()});
+    }
+    st.model = model.name;
+  }
+  if (const std::string bad = lash::resume_problem(model, ws, st); !bad.empty())
+    throw std::invalid_argument("start: " + bad);
+  return st;
+}
+
+py::dict simulate(const CompiledModel& cm, const py::object& start) {
   const lash::Model& model = cm.loaded.model;
+  std::optional<lash::State> from;
+  if (!start.is_none()) from = start_state(model, start);
   std::atomic<int> interrupt{0};
   const double n = model.solver.end_time / model.solver.output_interval;
   const size_t expected = n > 0 && n < 1e8 ? static_cast<size_t>(n) + 2 : 16;
@@ -215,6 +264,7 @@ py::dict simulate(const CompiledModel& cm) {
     lash::Workspace ws(model);
     lash::RunOptions options;
     options.interrupt = &interrupt;
+    options.from = from ? &*from : nullptr;
     return lash::simulate(model, ws, *collector, {}, {}, options);
   };
   const lash::RunResult r = run_interruptible(work, interrupt);
@@ -675,8 +725,9 @@ PYBIND11_MODULE(_lash, m) {
           return d;
         },
         py::arg("db"), "lash::read_study: a study database as dicts.");
-  m.def("simulate", &simulate, py::arg("model"),
-        "lash::simulate with an in-memory observer; returns a dict of arrays.");
+  m.def("simulate", &simulate, py::arg("model"), py::arg("start") = py::none(),
+        "lash::simulate with an in-memory observer (from `start`: a final_state.json path or a "
+        "Result's final_state dict); returns a dict of arrays.");
   m.def("analyze", &analyze, py::arg("model"), py::arg("options") = py::dict(),
         "lash::analyze_run; returns a dict of its typed results.");
   m.def("emit_yaml", [](const py::object& data) {

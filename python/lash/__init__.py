@@ -727,9 +727,14 @@ def _python_diagnostics(error: ModelError, keywords: Dict[str, str],
 
 def simulate(model: Model | str | os.PathLike, t_end: Optional[float] = None, *,
              output_interval: Optional[float] = None, integrator: Optional[str] = None,
-             overrides: str | Iterable[str] = ()) -> Result:
+             overrides: str | Iterable[str] = (), start: Any = None) -> Result:
     """Runs `model` from t = 0 to `t_end` (s; default the model's solver.end_time) and returns
     its outputs in memory as a `Result`, the same numbers `lash run` writes to timeseries.csv.
+
+    start continues a run instead, time and all, to t_end (later than the state's time): a
+    `Result` (where it ended), its `final_state`, or the path of a final_state.json that
+    `lash run` wrote (as `lash run --from`); a state that does not fit the model raises
+    ValueError naming what differs.
 
     output_interval (s) and integrator ("dopri5" or "bdf") override the model's solver
     settings, `overrides` are more "KEY.PATH=VALUE" strings (a single string is one override;
@@ -747,8 +752,18 @@ def simulate(model: Model | str | os.PathLike, t_end: Optional[float] = None, *,
     keywords = {p: k for p, k in _RUN_KEYWORDS.items()
                 if given[k] is not None and p not in set_by_caller}
     compiled = model.compiled(extra, keywords)
+    if isinstance(start, Result):
+        start = start.final_state
+    elif isinstance(start, (str, os.PathLike)):
+        start = os.fsdecode(start)
+    elif start is not None and not isinstance(start, Mapping):
+        raise TypeError(f"start: expected a Result, its final_state or the path of a "
+                        f"final_state.json, got {type(start).__name__}")
     try:
-        raw = _lash.simulate(compiled)
+        raw = _lash.simulate(compiled, dict(start) if isinstance(start, Mapping) else start)
+    except ValueError as e:  # a state that does not fit: as `--from` says it, in Python's terms
+        raise ValueError(str(e).replace("raise it with --set solver.end_time=...",
+                                        "give a later t_end")) from None
     except RuntimeError as e:  # no consistent initial state: named with its file, as the CLI does
         raise RuntimeError(f"{_message_name(model.filename)}: {e}") from None
     return Result(model, compiled, raw, model.overrides + extra)

@@ -1,6 +1,6 @@
 # Type hints of the package lash (python/lash/__init__.py, analysis.py); docstrings there.
 import os
-from typing import Any, Dict, Iterable, List, Optional, Sequence, Tuple
+from typing import Any, Dict, Iterable, List, Mapping, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -74,7 +74,8 @@ def load(path: str | bytes | os.PathLike, overrides: str | Iterable[str] = ...) 
 def loads(text: str, filename: str = ..., overrides: str | Iterable[str] = ...) -> Model: ...
 def simulate(model: Model | str | bytes | os.PathLike, t_end: Optional[float] = ..., *,
              output_interval: Optional[float] = ..., integrator: Optional[str] = ...,
-             overrides: str | Iterable[str] = ...) -> Result: ...
+             overrides: str | Iterable[str] = ...,
+             start: Result | Mapping[str, Any] | str | os.PathLike | None = ...) -> Result: ...
 
 
 class Study:

@@ -812,3 +812,31 @@ def test_an_assembly_failure_names_the_model_file(tmp_path):
     with pytest.raises(RuntimeError, match=rf"^{re.escape(str(path))}: "):
         lash.simulate(lash.load(path))
 
+
+
+def test_a_run_continues_from_a_result_or_a_state_file(tmp_path):
+    # Half a revolution, then the rest from where it ended: from the Result, and from the
+    # final_state.json `lash run` wrote for the same half, bit for bit the same; against the run
+    # made in one go, within the tolerance (the integrator restarts at the seam, as at an event).
+    whole = lash.simulate(FLORES, t_end=0.012)
+    half = lash.simulate(FLORES, t_end=0.006)
+    rest = lash.simulate(FLORES, t_end=0.012, start=half)
+    assert rest.time[0] == pytest.approx(0.006) and rest.time[-1] == pytest.approx(0.012)
+    assert abs(rest["slider.x"][-1] - whole["slider.x"][-1]) < 1e-8
+    cli = subprocess.run([LASH, "run", FLORES, "-q", "-o", str(tmp_path / "half"),
+                          "--set", "solver.end_time=0.006"], capture_output=True, text=True)
+    assert cli.returncode == 0, cli.stderr
+    from_file = lash.simulate(FLORES, t_end=0.012, start=tmp_path / "half" / "final_state.json")
+    assert np.array_equal(from_file.values, rest.values)
+    assert np.array_equal(lash.simulate(FLORES, t_end=0.012, start=half.final_state).values,
+                          rest.values)
+    # What does not fit is said as `lash run --from` says it, in Python's terms.
+    with pytest.raises(ValueError, match="^start: the state is at t = 0.006 s, not before the "
+                       "model's end_time = 0.006 s; give a later t_end$"):
+        lash.simulate(FLORES, t_end=0.006, start=half)
+    lugre = os.path.join(SOURCE, "examples", "flores_slider_crank_lugre.yaml")
+    with pytest.raises(ValueError, match="^start: the state does not match the model: entry 19 "
+                       "is 'energy.dissipated' in the state but 'rod_slider.bristle'"):
+        lash.simulate(lugre, t_end=0.012, start=half)
+    with pytest.raises(TypeError, match="^start: expected a Result"):
+        lash.simulate(FLORES, t_end=0.012, start=5)
