@@ -4,6 +4,8 @@
 #include <Eigen/LU>
 #include <Eigen/QR>
 #include <Eigen/SVD>
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
 #include <algorithm>
 #include <limits>
 #include <cmath>
@@ -337,6 +339,19 @@ BodyKin body_kin(const Workspace& ws, int b, const double* y) {
 Eigen::MatrixXd mass_matrix(const Workspace& ws) {
   Eigen::MatrixXd m = ws.mass_diag.asDiagonal();
   for (const auto& e : ws.mass_coupling) m(e.i, e.j) = m(e.j, e.i) = e.value;
+  return m;
+}
+
+Eigen::SparseMatrix<double> sparse_mass_matrix(const Workspace& ws) {
+  std::vector<Eigen::Triplet<double>> entries;
+  entries.reserve(ws.mass_diag.size() + 2 * ws.mass_coupling.size());
+  for (int i = 0; i < ws.mass_diag.size(); ++i) entries.emplace_back(i, i, ws.mass_diag[i]);
+  for (const auto& e : ws.mass_coupling) {
+    entries.emplace_back(e.i, e.j, e.value);
+    entries.emplace_back(e.j, e.i, e.value);
+  }
+  Eigen::SparseMatrix<double> m(ws.mass_diag.size(), ws.mass_diag.size());
+  m.setFromTriplets(entries.begin(), entries.end(), [](double, double b) { return b; });
   return m;
 }
 
@@ -812,6 +827,10 @@ std::string assembly_failure(const Model& model, const Workspace& ws, const Eige
 /// root is found (the run's stabilization warning then says what happened). phi, phi_q and
 /// phi_dot are the caller's buffers (their rows: the joints', drivers' and with close_clearance
 /// the clearance joints' closures); ws.kin is left at a trial state.
+/// A Cholesky factor of the mass matrix, M = L Lᵀ in the coordinates' own order (matrixL/U).
+using MassFactor = Eigen::SimplicialLLT<Eigen::SparseMatrix<double>, Eigen::Lower,
+                                        Eigen::NaturalOrdering<int>>;
+
 void velocities_on_a_branch(const Model& model, Workspace& ws, bool close_clearance,
                             Eigen::VectorXd& y, Eigen::VectorXd& phi, Eigen::MatrixXd& phi_q,
                             Eigen::VectorXd& phi_dot) {
@@ -821,15 +840,27 @@ void velocities_on_a_branch(const Model& model, Workspace& ws, bool close_cleara
   build_constraints(model, ws, 0.0, y.data(), close_clearance, phi, phi_q, &phi_dot, &gamma);
   const double scale = gamma.norm();
   if (!(scale > 0.0)) return;
-  const Eigen::LLT<Eigen::MatrixXd> chol(mass_matrix(ws));
-  const Eigen::MatrixXd scaled = chol.matrixU().solve<Eigen::OnTheRight>(phi_q);
+  // M = L Lᵀ (sparse: M is block diagonal by bodies), Φ_q L⁻ᵀ = (L⁻¹ Φ_qᵀ)ᵀ. Its rank from the
+  // singular values alone first: the common full rank returns before the full SVD, whose
+  // nq × nq V made assembly cost nq³ (1.6 s beside 800 free bodies).
+  const Eigen::SparseMatrix<double> m = sparse_mass_matrix(ws);
+  const MassFactor chol(m);
+  const Eigen::MatrixXd scaled =
+      chol.matrixL().solve(Eigen::MatrixXd(phi_q.transpose())).transpose();
+  auto rank_of = [&](const Eigen::VectorXd& sv) {
+    int r = 0;
+    while (r < sv.size() && sv[r] > 1e-8 * sv[0]) ++r;
+    return r;
+  };
+  if (const int r = rank_of(Eigen::JacobiSVD<Eigen::MatrixXd>(scaled).singularValues());
+      r == 0 || r == rows || r == nq)
+    return;
   const Eigen::JacobiSVD<Eigen::MatrixXd> svd(scaled, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  const Eigen::VectorXd& sv = svd.singularValues();
-  int rank = 0;
-  while (rank < sv.size() && sv[rank] > 1e-8 * sv[0]) ++rank;
+  const int rank = rank_of(svd.singularValues());
   if (rank == 0 || rank == rows || rank == nq) return;
   const Eigen::MatrixXd left = svd.matrixU().rightCols(rows - rank);
-  const Eigen::MatrixXd free = chol.matrixU().solve(svd.matrixV().rightCols(nq - rank));
+  const Eigen::MatrixXd free =
+      chol.matrixU().solve(Eigen::MatrixXd(svd.matrixV().rightCols(nq - rank)));
   const Eigen::VectorXd v0 = y.segment(nq, nq);
   auto residual = [&](const Eigen::VectorXd& a) {
     y.segment(nq, nq) = v0 + free * a;
@@ -844,7 +875,7 @@ void velocities_on_a_branch(const Model& model, Workspace& ws, bool close_cleara
   // linear term to move Newton off a = 0) the size at which Q balances F(0), Q(±e_i) measured
   // along each free direction (a slider-crank driven at its slider from rest at dead centre:
   // the crank started at rest, and a push of 3.4e8 N started it).
-  double s = (chol.matrixU() * v0).norm();
+  double s = std::sqrt(v0.dot(m * v0));  // |Lᵀ v0|
   if (!(s > 0.0)) {
     double q = 0.0;
     for (int i = 0; i < nq - rank; ++i) {
@@ -935,25 +966,39 @@ Eigen::VectorXd initial_state(const Model& model, Workspace& ws) {
   // given velocities change least, and a light link takes the deformation rate (a rigid motion
   // would have stopped a rod held by a clamped flexural pivot, and started it with a blow).
   // Returns the largest velocity residual after the correction relative to the one before.
-  auto correct_velocities = [&](const Eigen::MatrixXd& t) {
+  // `t` null: every coordinate (T = I), with M's Cholesky factor sparse (M is block diagonal
+  // by bodies): dense products and a dense factorisation of M cost nq³, 2.7 s of assembly for a
+  // slider-crank beside 400 free bodies.
+  auto correct_velocities = [&](const Eigen::MatrixXd* t) {
     update_kin(ws, y.data());
     build_constraints(model, ws, 0.0, y.data(), ideal, phi, phi_q, &phi_dot, nullptr);
     const double before = phi_dot.size() == 0 ? 0.0 : phi_dot.cwiseAbs().maxCoeff();
-    const Eigen::LLT<Eigen::MatrixXd> chol(t.transpose() * mass_matrix(ws) * t);
-    const Eigen::MatrixXd scaled =
-        chol.matrixU().solve<Eigen::OnTheRight>(Eigen::MatrixXd(phi_q * t));
-    Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(scaled);
-    y.segment(nq, nq) -= t * chol.matrixU().solve(cod.solve(phi_dot));
+    if (t) {
+      const Eigen::LLT<Eigen::MatrixXd> chol(t->transpose() * mass_matrix(ws) * *t);
+      const Eigen::MatrixXd scaled =
+          chol.matrixU().solve<Eigen::OnTheRight>(Eigen::MatrixXd(phi_q * *t));
+      Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(scaled);
+      y.segment(nq, nq) -= *t * chol.matrixU().solve(cod.solve(phi_dot));
+    } else {
+      // M = L Lᵀ in natural order: Φ_q L⁻ᵀ = (L⁻¹ Φ_qᵀ)ᵀ, and Δ = L⁻ᵀ (Φ_q L⁻ᵀ)⁺ Φ̇.
+      const MassFactor chol(sparse_mass_matrix(ws));
+      const Eigen::MatrixXd scaled =
+          chol.matrixL().solve(Eigen::MatrixXd(phi_q.transpose())).transpose();
+      Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(scaled);
+      y.segment(nq, nq) -= chol.matrixU().solve(Eigen::VectorXd(cod.solve(phi_dot)));
+    }
     update_kin(ws, y.data());
     build_constraints(model, ws, 0.0, y.data(), ideal, phi, phi_q, &phi_dot, nullptr);
     const double after = phi_dot.size() == 0 ? 0.0 : phi_dot.cwiseAbs().maxCoeff();
     return after / std::max(before, 1e-300);
   };
   const Eigen::VectorXd guess = y;
-  if (!flexible || !ideal ||
-      !(correct_velocities(rigid_motion_basis(model, ws, y.data())) < 1e-9)) {
+  if (!flexible || !ideal) {
+    correct_velocities(nullptr);
+  } else if (const Eigen::MatrixXd rigid = rigid_motion_basis(model, ws, y.data());
+             !(correct_velocities(&rigid) < 1e-9)) {
     y = guess;
-    correct_velocities(Eigen::MatrixXd::Identity(nq, nq));
+    correct_velocities(nullptr);
   }
   if (!flexible) velocities_on_a_branch(model, ws, ideal, y, phi, phi_q, phi_dot);
 

@@ -9,6 +9,7 @@
 ///   y = [q (nq), q̇ (nq), auxiliary states (na), E_dissipated, W_input, W_stabilization].
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
+#include <Eigen/SparseCore>
 #include <array>
 #include <memory>
 #include <optional>
@@ -144,6 +145,8 @@ struct Workspace {
 
 /// The mass matrix M (nq × nq), dense.
 Eigen::MatrixXd mass_matrix(const Workspace& ws);
+/// The same, sparse (nq entries and the flexible links' bands): for work on large models.
+Eigen::SparseMatrix<double> sparse_mass_matrix(const Workspace& ws);
 
 /// Kinematics of body b read directly from y (the ground for kGround).
 BodyKin body_kin(const Workspace& ws, int b, const double* y);
