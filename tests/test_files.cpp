@@ -106,8 +106,9 @@ TEST(Files, AFolderLockRefusesASecondOwnerAndIsReleasedWithIt) {
       lash::FolderLock second((dir / "run").string());
       FAIL() << "two owners of one folder";
     } catch (const std::invalid_argument& e) {
-      EXPECT_NE(std::string(e.what()).find("in use by another lash (process " +
-                                           std::to_string(getpid()) + ")"),
+      EXPECT_NE(std::string(e.what()).find("in use by another run of this process (process " +
+                                           std::to_string(getpid()) + "); wait for it to finish "
+                                           "or choose another folder"),
                 std::string::npos)
           << e.what();
     }

@@ -232,9 +232,13 @@ FolderLock::FolderLock(const std::string& folder) {
     if (err == EWOULDBLOCK) {
       std::string who = n > 0 ? std::string(pid, static_cast<std::size_t>(n)) : std::string();
       while (!who.empty() && (who.back() == '\n' || who.back() == ' ')) who.pop_back();
-      throw std::invalid_argument("output folder '" + folder + "' is in use by another lash" +
-                                  (who.empty() ? std::string() : " (process " + who + ")") +
-                                  "; wait for it to finish or choose another folder with -o");
+      // The holder may be this process (Python: another thread's run or sweep into the folder).
+      const bool here = who == std::to_string(::getpid());
+      throw std::invalid_argument(
+          "output folder '" + folder + "' is in use by " +
+          (here ? "another run of this process (process " + who + ")"
+                : "another lash" + (who.empty() ? std::string() : " (process " + who + ")")) +
+          "; wait for it to finish or choose another folder");
     }
     throw IoError(path, "cannot lock: " + errno_text(err));
   }
