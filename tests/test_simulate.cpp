@@ -518,19 +518,11 @@ solver: {end_time: 1e-3, output_interval: 1e-4, initial_state: given}
 }
 
 TEST(Stiffness, ARunWhoseStepsStabilitySetsNamesBdf) {
-  // A 1 kg puck released 1 mm from its rest on a 1 N/m spring with a 1e6 N·s/m damper: λ = −c/m
+  // kStiffPuck: a 1 kg puck released 1 mm from its rest on a 1 N/m spring with a 1e6 N·s/m damper: λ = −c/m
   // = −1e6 1/s holds DOPRI5 at h ≈ 3.3/|λ| = 3.3e-6 s long after the 1e-6 s transient has
   // died (Hairer, Nørsett & Wanner II, §IV.2), 15 000 steps for 0.05 s. BDF steps as accuracy
   // allows, and DOPRI5 on the undamped spring says nothing.
-  const std::string yaml = R"Y(
-gravity: [0, 0]
-bodies:
-  puck: {mass: 1, inertia: 1, position: [0.001, 0], markers: {O: [0, 0]}}
-ground: {markers: {O: [0, 0]}}
-loads:
-  tie: {type: spring_damper, from: ground.O, to: puck.O, stiffness: 1, damping: 1e6, free_length: 0}
-solver: {end_time: 0.05, output_interval: 1e-3, initial_state: given, rtol: 1e-6, atol: 1e-9}
-)Y";
+  const std::string yaml = kStiffPuck;
   const SimRun stiff = run_text(yaml);
   ASSERT_TRUE(stiff.result.status.ok) << stiff.result.status.message;
   const IntegratorStats& s = stiff.result.stats;

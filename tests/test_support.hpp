@@ -127,4 +127,16 @@ inline std::string parallelogram_yaml(int cranks, double first_crank_scale, doub
   return y;
 }
 
+/// A 1 kg puck released 1 mm from rest on a 1 N/m spring with a 1e6 N·s/m damper: λ = −c/m =
+/// −1e6 1/s makes it stiff for DOPRI5 (steps of 3.3e-6 s for 0.05 s), not for BDF.
+inline const char* const kStiffPuck = R"Y(
+gravity: [0, 0]
+bodies:
+  puck: {mass: 1, inertia: 1, position: [0.001, 0], markers: {O: [0, 0]}}
+ground: {markers: {O: [0, 0]}}
+loads:
+  tie: {type: spring_damper, from: ground.O, to: puck.O, stiffness: 1, damping: 1e6, free_length: 0}
+solver: {end_time: 0.05, output_interval: 1e-3, initial_state: given, rtol: 1e-6, atol: 1e-9}
+)Y";
+
 }  // namespace lash::test

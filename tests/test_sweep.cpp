@@ -1045,15 +1045,7 @@ TEST(StudyRun, ARunKeepsTheWarningsLashRunWouldPrint) {
   // says so in its message, completed as it is; the undamped run says nothing.
   const fs::path dir = temp_dir("warned");
   fs::create_directories(dir);
-  std::ofstream(dir / "puck.yaml") << R"Y(
-gravity: [0, 0]
-bodies:
-  puck: {mass: 1, inertia: 1, position: [0.001, 0], markers: {O: [0, 0]}}
-ground: {markers: {O: [0, 0]}}
-loads:
-  tie: {type: spring_damper, from: ground.O, to: puck.O, stiffness: 1, damping: 1e6, free_length: 0}
-solver: {end_time: 0.05, output_interval: 1e-3, initial_state: given, rtol: 1e-6, atol: 1e-9}
-)Y";
+  std::ofstream(dir / "puck.yaml") << lash::test::kStiffPuck;
   const StudySpec spec = study_text("study: puck\nmodel: " + (dir / "puck.yaml").string() +
                                     "\nparameters:\n  loads.tie.damping: {values: [1e6, 0]}\n"
                                     "transient: {time: 0}\nkeep: {channels: [puck.x]}\n");
