@@ -11,12 +11,14 @@
 #include <pybind11/stl.h>
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
 #include <csignal>
 #include <cstdlib>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -225,12 +227,28 @@ lash::State start_state(const lash::Model& model, const py::object& start) {
       if (!d.contains(key))
         throw std::invalid_argument(std::string("start: a Result's final_state has '") + key +
                                     "'; this one has not");
-    st.t = d["time"].cast<double>();
-    st.step = d.contains("step") ? d["step"].cast<double>() : 0.0;
-    const auto names = d["names"].cast<std::vector<std::string>>();
-    const auto y = d["y"].cast<std::vector<double>>();
+    // Each entry by name and type (a pybind11 cast error named none, and was taken for the
+    // model's own failure).
+    auto as = [&](const char* key, const char* what, auto value) {
+      try {
+        return py::cast<decltype(value)>(d[key]);
+      } catch (const py::cast_error&) {
+        throw py::type_error(std::string("start: '") + key + "' must be " + what + ", got " +
+                             py::str(py::type::of(d[key]).attr("__name__")).cast<std::string>());
+      }
+    };
+    st.t = as("time", "a number (s)", 0.0);
+    st.step = d.contains("step") ? as("step", "a number (s)", 0.0) : 0.0;
+    if (!std::isfinite(st.step) || st.step < 0)
+      throw std::invalid_argument("start: 'step' must be a finite step size >= 0 s, got " +
+                                  std::to_string(st.step));
+    const auto names = as("names", "a list of names", std::vector<std::string>{});
+    const auto y = as("y", "a list of numbers", std::vector<double>{});
     const auto expected = lash::state_names(model, ws);
-    if (names != expected || y.size() != names.size()) {
+    if (y.size() != names.size())
+      throw std::invalid_argument("start: 'y' has " + std::to_string(y.size()) + " entries and "
+                                  "'names' " + std::to_string(names.size()));
+    if (names != expected) {
       size_t i = 0;
       while (i < names.size() && i < expected.size() && names[i] == expected[i]) ++i;
       throw std::invalid_argument(
@@ -239,12 +257,18 @@ lash::State start_state(const lash::Model& model, const py::object& start) {
           (i < expected.size() ? expected[i] : std::string("(nothing)")) + "' in the model");
     }
     st.y = Eigen::Map<const Eigen::VectorXd>(y.data(), static_cast<Eigen::Index>(y.size()));
-    const py::dict modes = d["modes"].cast<py::dict>();
-    for (const std::string& joint : clearance_joint_names(model)) {
-      if (!modes.contains(joint))
+    const auto modes = as("modes", "a dict of clearance joint names to bool",
+                          std::map<std::string, bool>{});
+    const std::vector<std::string> joints = clearance_joint_names(model);
+    for (const std::string& joint : joints) {
+      if (!modes.count(joint))
         throw std::invalid_argument("start: no contact mode for clearance joint '" + joint + "'");
-      st.modes.push_back({modes[py::str(joint)].cast<bool>()});
+      st.modes.push_back({modes.at(joint)});
     }
+    for (const auto& [joint, mode] : modes)
+      if (std::find(joints.begin(), joints.end(), joint) == joints.end())
+        throw std::invalid_argument("start: '" + joint + "' in 'modes' is no clearance joint of "
+                                    "the model");
     st.model = model.name;
   }
   if (const std::string bad = lash::resume_problem(model, ws, st); !bad.empty())

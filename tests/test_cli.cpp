@@ -319,8 +319,9 @@ TEST(Cli, AStudyFileWhereAModelBelongsIsNamedAsAStudy) {
     const Result r = run_lash(std::string(cmd) + " " + (dir / "s.yaml").string() +
                               (std::string(cmd) == "run" ? " -o " + (dir / "out").string() : ""));
     EXPECT_EQ(r.code, 2) << r.out;
-    EXPECT_NE(r.out.find("s.yaml is a study (a map with 'study:'), not a model: run it with "
-                         "`lash sweep "), std::string::npos) << cmd << ": " << r.out;
+    EXPECT_NE(r.out.find("s.yaml is a study file (it has 'study:', or 'model:' and no bodies), "
+                         "not a model: run it with `lash sweep "), std::string::npos)
+        << cmd << ": " << r.out;
     EXPECT_EQ(r.out.find("unknown"), std::string::npos) << r.out;
   }
   fs::remove_all(dir);

@@ -456,6 +456,20 @@ TEST(Redundancy, AssemblyThatMovesABodyFarFromItsPositionIsSaid) {
   Workspace wn(near.model);
   initial_state(near.model, wn);
   EXPECT_TRUE(wn.warnings.empty()) << wn.warnings[0];
+  // A body alone at the origin, its driver 1 µm off: a mechanism of no size, but no warning (the
+  // size is at least 1 mm; it was "more than 10 % of 0 m").
+  const Model alone = load_model_text(R"Y(
+bodies:
+  b: {mass: 1, inertia: 1}
+joints:
+  p: {type: translational, guide: ground, slider: b, axis: [1, 0]}
+drivers:
+  d: {joint: p, motion: "1e-6"}
+solver: {end_time: 1}
+)Y", "alone.yaml").model;
+  Workspace wa(alone);
+  initial_state(alone, wa);
+  EXPECT_TRUE(wa.warnings.empty()) << wa.warnings[0];
 }
 
 TEST(Singular, ParallelogramPassesItsInLinePositionsWithBothIntegrators) {

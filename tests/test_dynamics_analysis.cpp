@@ -128,6 +128,16 @@ TEST(ContactModes, SharesOfAConstructedHistory) {
   ASSERT_EQ(head.episodes.size(), 1u);
   EXPECT_TRUE(head.episodes[0].continuous);
   EXPECT_EQ(head.impacts, 1);
+  // Windows whose edges fall on an event: an episode that begins at t0 or ends at t1 is whole
+  // inside, and a neighbour's times do not count (a 2 ms impact at 0.3 s was "continuous").
+  const std::vector<double> t2{0.1, 0.2, 0.3, 0.302, 0.4, 0.6};
+  const std::vector<bool> on2{true, false, true, false, true, false};
+  const std::vector<double> v2(6, 1.0);
+  for (const auto& [a, b] : std::vector<std::pair<double, double>>{{0.3, 0.35}, {0.25, 0.302}, {0.25, 0.35}}) {
+    const ModeSummary e = contact_modes(t2, on2, v2, false, a, b, 0.05);
+    ASSERT_EQ(e.episodes.size(), 1u) << a << " " << b;
+    EXPECT_FALSE(e.episodes[0].continuous) << a << " " << b;
+  }
   const ModeSummary cut = contact_modes(t, on, v, true, 0.105, 0.2, 0.05);
   ASSERT_EQ(cut.episodes.size(), 1u);
   EXPECT_FALSE(cut.episodes[0].continuous);

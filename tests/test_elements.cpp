@@ -446,6 +446,9 @@ TEST(State, AStateOfAnotherModelIsRefusedWithWhatDiffers) {
     Model longer = flores;  // the state is at end_time: continued one more millisecond
     longer.solver.end_time = 0.002;
     EXPECT_EQ(resume_problem(longer, wf, st), "");
+    State grazing = st;  // an earlier version's located δ̇ a rounding below 0: read as 0
+    grazing.y[wf.aux_impact[0]] = -1e-15;
+    EXPECT_EQ(resume_problem(longer, wf, grazing), "");
     State neg = st;
     neg.y[wf.aux_impact[0]] = -0.5;
     const std::string said = resume_problem(longer, wf, neg);

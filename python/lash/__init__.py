@@ -761,6 +761,8 @@ def simulate(model: Model | str | os.PathLike, t_end: Optional[float] = None, *,
                         f"final_state.json, got {type(start).__name__}")
     try:
         raw = _lash.simulate(compiled, dict(start) if isinstance(start, Mapping) else start)
+    except TypeError:  # an entry of `start` of the wrong type, named
+        raise
     except ValueError as e:  # a state that does not fit: as `--from` says it, in Python's terms
         raise ValueError(str(e).replace("raise it with --set solver.end_time=...",
                                         "give a later t_end")) from None

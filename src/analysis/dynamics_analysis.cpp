@@ -114,26 +114,26 @@ ModeSummary contact_modes(const std::vector<double>& times, const std::vector<bo
   ModeSummary m;
   bool in = in_contact_at_t0;
   double start = t0;
-  // An episode is classified by its whole duration: one under way at t0 began at the last
-  // onset before it, one under way at t1 ends at the first separation after it (where the
+  // An episode is classified by its whole duration: the one under way at t0 began at the last
+  // onset before it, the one under way at t1 ends at the first separation after it (where the
   // events say; else at the window's edge). Clipped first, the middle of a long contact seen
   // through a short window counted as an impact.
-  auto true_start = [&](double s) {
-    if (s > t0) return s;
-    double from = s;
-    for (size_t i = 0; i < times.size() && times[i] < t0; ++i)
-      if (onset[i]) from = times[i];
-    return from;
-  };
-  auto true_end = [&](double e) {
-    if (e < t1) return e;
-    for (size_t i = 0; i < times.size(); ++i)
-      if (times[i] > t1 && !onset[i]) return times[i];
-    return e;
-  };
-  auto close = [&](double end) {
-    ContactEpisode e{start, end, true_end(end) - true_start(start) >= continuous_time};
-    m.episodes.push_back(e);
+  bool first = true;  // the next episode closed is the one under way at t0, if any
+  auto close = [&](double end, bool past_t1) {
+    double from = start, to = end;
+    if (first && in_contact_at_t0) {
+      for (size_t i = 0; i < times.size() && times[i] < t0; ++i)
+        if (onset[i]) from = times[i];
+    }
+    if (past_t1) {
+      for (size_t i = 0; i < times.size(); ++i)
+        if (times[i] > t1 && !onset[i]) {
+          to = times[i];
+          break;
+        }
+    }
+    first = false;
+    m.episodes.push_back({start, end, to - from >= continuous_time});
   };
   for (size_t i = 0; i < times.size(); ++i) {
     if (times[i] < t0 || times[i] > t1) continue;
@@ -144,10 +144,11 @@ ModeSummary contact_modes(const std::vector<double>& times, const std::vector<bo
       m.impact_velocities.push_back(velocities[i]);
     } else if (!onset[i] && in) {
       in = false;
-      close(times[i]);
+      close(times[i], false);
     }
+    if (onset[i]) first = false;  // an onset in the window: no episode was under way at t0
   }
-  if (in) close(t1);
+  if (in) close(t1, true);
   const double span = t1 - t0;
   double impact = 0, continuous = 0;
   for (const auto& e : m.episodes) (e.continuous ? continuous : impact) += e.end - e.start;

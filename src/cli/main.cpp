@@ -65,9 +65,10 @@ class ProgressObserver : public lash::Observer {
     }
     last_ = now;
     const double wall = std::chrono::duration<double>(now - start_).count();
-    fmt::print(stderr, "{}  t = {:.6g} s  {:5.1f}%  {:.3g} simulated s per wall s  {} evaluations of the model{}",
+    fmt::print(stderr, "{}  t = {:.6g} s  {:5.1f}%  {:.3g} simulated s per wall s  {} evaluation{} of the model{}",
                mode_ == ProgressMode::terminal ? "\r" : "", t, 100.0 * t / t_end,
-               wall > 0 ? t / wall : 0.0, rhs_, mode_ == ProgressMode::terminal ? "   " : "\n");
+               wall > 0 ? t / wall : 0.0, rhs_, rhs_ == 1 ? "" : "s",
+               mode_ == ProgressMode::terminal ? "   " : "\n");
     if (mode_ == ProgressMode::terminal && t >= t_end) fmt::print(stderr, "\n");
   }
 
@@ -376,7 +377,8 @@ int main(int argc, char** argv) {
     // A study file given where a model belongs: said so, not its keys listed as unknown (looked
     // at only when the file is no model, so a run parses its model once).
     if (!*report && !*analyze && lash::cli::is_study_file(model_path)) {
-      std::cerr << "error: " << model_path << " is a study (a map with 'study:'), not a model: "
+      std::cerr << "error: " << model_path << " is a study file (it has 'study:', or 'model:' "
+                << "and no bodies), not a model: "
                 << "run it with `lash sweep " << model_path << " -o DIR`, or name its model file\n";
       return kExitBadInput;
     }
@@ -652,7 +654,7 @@ int main(int argc, char** argv) {
     lash::Workspace ws(model);
     // A line every 30 s in a log, or every LASH_PROGRESS_SECONDS (>= 0; 0: every output).
     double log_seconds = 30.0;
-    if (const char* env = std::getenv("LASH_PROGRESS_SECONDS"); env && *env) {
+    if (const char* env = std::getenv("LASH_PROGRESS_SECONDS"); env && *env && !quiet) {
       char* end = nullptr;
       const double v = std::strtod(env, &end);
       if (*end == '\0' && std::isfinite(v) && v >= 0.0 && v <= 1e9)

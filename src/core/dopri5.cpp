@@ -153,10 +153,12 @@ class Dopri5 final : public Integrator {
       // estimates the Jacobian's dominant |λ|; h·|λ| near 3.3 is the edge of DOPRI5's
       // stability region on the negative real axis. Tested every kStiffEvery steps and at every
       // step once a test held. yt_ is the error estimate's next.
+      // The components diagnosed only (OdeProblem::n_diagnosed): the energy accounts' rows,
+      // dE/dt = P(q, q̇), are no eigenvalues of the motion.
       double h_lambda = 0.0;
       if (ok && (stiff_run_ > 0 || stats_.steps % kStiffEvery == 0)) {
-        const double den = (ynew_ - yt_).squaredNorm();
-        if (den > 0.0) h_lambda = h * std::sqrt((k7_ - k6_).squaredNorm() / den);
+        const double den = (ynew_ - yt_).head(diagnosed_).squaredNorm();
+        if (den > 0.0) h_lambda = h * std::sqrt((k7_ - k6_).head(diagnosed_).squaredNorm() / den);
       }
       if (!ok) {  // a stage left the domain: shrink hard and retry
         ++stats_.rejected_steps;

@@ -1034,8 +1034,8 @@ Eigen::VectorXd initial_state(const Model& model, Workspace& ws) {
     ws.warnings.push_back(s.str());
   }
   // A body (rigid or point mass) that assembly moved far from its given position, against the
-  // mechanism's size: the largest distance between two of the given positions and markers
-  // (ground's origin and the ground points of joints among them). A pose given in the wrong unit or for another configuration (the slider of a
+  // mechanism's size: the extent of the given positions and markers (ground's origin and the
+  // ground points of joints among them). A pose given in the wrong unit or for another configuration (the slider of a
   // slider-crank given 0.34 m off its guide's reach) was moved there without a word.
   {
     std::vector<Vec2> at, extent{Vec2::Zero()};  // given positions; and markers, in the world
@@ -1053,10 +1053,12 @@ Eigen::VectorXd initial_state(const Model& model, Workspace& ws) {
     for (const Joint& j : model.joints)  // the ground's points the joints use
       for (const PointRef* p : {&j.a, &j.b})
         if (p->body == kGround) extent.push_back(p->s);
-    double size = 0.0;
-    for (size_t i = 0; i < extent.size(); ++i)
-      for (size_t j = i + 1; j < extent.size(); ++j)
-        size = std::max(size, (extent[i] - extent[j]).norm());
+    // The diagonal of their bounding box (at most 1.42 times the largest distance between two),
+    // and at least kAssemblyMoveFloor: a body alone at the origin moved 1e-6 m by its driver was
+    // "more than 10 % of 0 m".
+    Vec2 lo = extent[0], hi = extent[0];
+    for (const Vec2& p : extent) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+    const double size = std::max((hi - lo).norm(), kAssemblyMoveFloor);
     std::vector<std::pair<double, int>> moved;
     for (int b = 0, i = 0; b < ws.nb; ++b) {
       if (model.bodies[b].flexible()) continue;

@@ -191,9 +191,11 @@ Eigen::VectorXd initial_state(const Model& model, Workspace& ws);
 inline constexpr double kStateTolerancePosition = 1e-6;
 /// A rigid body turned by assembly more than this from its given angle (rad, 10°) is warned of.
 inline constexpr double kAssemblyTurnWarning = 0.17453292519943295;
-/// A body moved by assembly more than this share of the mechanism's size (the largest distance
-/// between two given positions, ground's origin included) is warned of.
+/// A body moved by assembly more than this share of the mechanism's size (the diagonal of the
+/// box around its given positions and markers, ground's origin included) is warned of.
 inline constexpr double kAssemblyMoveWarning = 0.1;
+/// The smallest size that share is taken of, m (moves below 0.1 mm are never warned of).
+inline constexpr double kAssemblyMoveFloor = 1e-3;
 inline constexpr double kStateToleranceVelocity = 1e-4;
 /// Largest constraint residual |Φ| (m or rad) a run may reach: beyond it the joints have come
 /// apart (a driver forcing a locked mechanism, a loop that does not close) and the run stops as

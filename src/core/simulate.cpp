@@ -643,7 +643,9 @@ std::string resume_problem(const Model& model, Workspace& ws, const State& state
   for (int c = 0; c < ws.nc; ++c) {
     const Joint& j = model.joints[ws.clearance_joints[c]];
     // δ̇⁻ is a speed into the wall (a run writes |δ̇| at onset, >= 0): a negative one was edited.
-    if (const double v = state.y[ws.aux_impact[c]]; v < 0.0) {
+    // Earlier versions stored the located δ̇ as it was, a rounding below 0 at a grazing onset:
+    // those read as 0 (the force law floors δ̇⁻ at min_impact_velocity either way).
+    if (const double v = state.y[ws.aux_impact[c]]; v < -kStateToleranceVelocity) {
       s << "joint '" << j.name << "': the state's impact velocity " << v
         << " m/s is negative; it is the speed at which the journal met its bearing's wall, >= 0";
       return s.str();

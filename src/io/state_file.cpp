@@ -10,6 +10,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
+#include <unordered_set>
 
 namespace lash {
 
@@ -57,18 +58,14 @@ State read_state(const std::string& path, const Model& model, const Workspace& w
   json j;
   // A key written twice in one object (a file edited by hand) is refused: the JSON library keeps
   // the last, so the first would be silently ignored.
-  std::vector<std::vector<std::string>> keys;  // per open object, its keys so far
+  std::vector<std::unordered_set<std::string>> keys;  // per open object, its keys so far
   std::string twice;
   const json::parser_callback_t check = [&](int, json::parse_event_t event, json& parsed) {
     if (event == json::parse_event_t::object_start) keys.emplace_back();
     else if (event == json::parse_event_t::object_end) keys.pop_back();
     else if (event == json::parse_event_t::key && !keys.empty()) {
-      const std::string k = parsed.get<std::string>();
-      if (std::find(keys.back().begin(), keys.back().end(), k) != keys.back().end()) {
-        if (twice.empty()) twice = k;
-      } else {
-        keys.back().push_back(k);
-      }
+      std::string k = parsed.get<std::string>();
+      if (!keys.back().insert(k).second && twice.empty()) twice = std::move(k);
     }
     return true;
   };

@@ -996,11 +996,12 @@ RunAnalysis analyze_samples(const Model& model, const AnalysisOptions& o, Plan& 
       const auto e = exact->find(st.channel);
       if (e != exact->end()) {
         // Between outputs a channel can only reach further than its samples (a NaN sample is
-        // not tracked): the exact extrema include the samples'. Taken as they are: a sample read
-        // back from the CSV's 9 digits may lie a rounding beyond them (30.2977414 against
-        // 30.297741356 m/s, and the time of that output instead of the peak's).
-        st.min = e->second.min, st.t_min = e->second.t_min;
-        st.max = e->second.max, st.t_max = e->second.t_max;
+        // not tracked): the exact extrema include the samples'. A sample read back from the
+        // CSV's 9 digits may lie a rounding beyond them (30.2977414 against 30.297741356 m/s):
+        // the exact one is kept then too, with its time; a sample further out is kept.
+        auto rounding = [](double v) { return 5e-9 * std::abs(v) + 1e-300; };
+        if (e->second.min <= c.min + rounding(c.min)) st.min = e->second.min, st.t_min = e->second.t_min;
+        if (e->second.max >= c.max - rounding(c.max)) st.max = e->second.max, st.t_max = e->second.t_max;
         st.exact = true;
       }
     }

@@ -840,3 +840,13 @@ def test_a_run_continues_from_a_result_or_a_state_file(tmp_path):
         lash.simulate(lugre, t_end=0.012, start=half)
     with pytest.raises(TypeError, match="^start: expected a Result"):
         lash.simulate(FLORES, t_end=0.012, start=5)
+    # A final_state dict edited by hand: each entry named.
+    for key, value, error, said in [("y", "abc", TypeError, "'y' must be a list of numbers"),
+                                    ("time", None, TypeError, "'time' must be a number"),
+                                    ("step", float("nan"), ValueError, "'step' must be a finite"),
+                                    ("y", [0.0], ValueError, "'y' has 1 entries and 'names' 22"),
+                                    ("modes", {"rod_slider": True, "pin": False}, ValueError,
+                                     "'pin' in 'modes' is no clearance joint")]:
+        state = dict(half.final_state, **{key: value})
+        with pytest.raises(error, match=f"^start: {re.escape(said)}"):
+            lash.simulate(FLORES, t_end=0.012, start=state)
