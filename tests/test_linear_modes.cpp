@@ -112,3 +112,25 @@ TEST(LinearModes, ADrivenMechanismHeldByItsDriversHasNoFreedom) {
 
 }  // namespace
 }  // namespace lash::test
+
+TEST(LinearModes, AShortRodFarFromTheOriginSwingsAtItsOwnFrequency) {
+  // A point mass on a 1e-4 m distance joint, pivoted at x = 0 and at x = 1 m: √(g/L)/(2π) =
+  // 49.85 Hz at both. At x = 1 m it was 36.47 Hz: the row's gradient d/L at the configurations
+  // drawn for Φ_q's pattern made its pivot there 1e10 times its own, and it was softened.
+  for (const double x : {0.0, 1.0, 100.0}) {
+    char yaml[400];
+    std::snprintf(yaml, sizeof yaml, R"Y(
+gravity: [0, -9.81]
+ground: {markers: {P: [%g, 0]}}
+bodies:
+  bob: {mass: 1, position: [%g, -1e-4]}
+joints:
+  rod: {type: distance, from: ground.P, to: bob}
+solver: {end_time: 1}
+)Y", x, x);
+    const lash::LinearModes modes =
+        lash::linear_modes(lash::load_model_text(yaml, "bob.yaml").model);
+    ASSERT_EQ(modes.modes.size(), 1u) << x;
+    EXPECT_NEAR(modes.modes[0].frequency, std::sqrt(9.81 / 1e-4) / (2 * M_PI), 5e-3) << x;
+  }
+}
