@@ -1004,83 +1004,70 @@ Eigen::VectorXd initial_state(const Model& model, Workspace& ws) {
 
   if (const std::string why = constraint_problem(model, ws, 0.0, y, false); !why.empty())
     throw std::runtime_error(why);
-  // A rigid body that assembly turned far from its given angle: said (after the solver's
+  // Bodies that assembly turned or moved far from their given poses: said (after the solver's
   // warnings, which it sets anew). A loop that closes only approximately (a redundant joint's
   // pivot 1e-11 m off) is closed exactly only at isolated positions, and Newton's method goes
-  // there: a double parallelogram posed at −30° started at −90°, silently.
-  std::vector<std::pair<double, int>> turned;  // (angle, body), every one beyond the warning's
+  // there: a double parallelogram posed at −30° started at −90°, silently. A pose given in the
+  // wrong unit or for another configuration (the slider of a slider-crank given 0.34 m off its
+  // guide's reach) was moved there without a word.
   Eigen::VectorXd given = Eigen::VectorXd::Zero(ws.ny);
+  // The mechanism's size: the diagonal of the box around the given positions and markers (the
+  // ground's origin and the ground points of joints among them), at least kAssemblyMoveFloor (a
+  // body alone at the origin moved 1e-6 m by its driver was "more than 10 % of 0 m").
+  Vec2 lo = Vec2::Zero(), hi = Vec2::Zero();
+  auto extend = [&](const Vec2& p) { lo = lo.cwiseMin(p), hi = hi.cwiseMax(p); };
   for (int b = 0; b < ws.nb; ++b) {
     const Body& body = model.bodies[b];
-    if (body.type != BodyType::rigid) continue;
-    kind_of(body).initial(body, given.data() + ws.blocks[b].offset, nullptr);
-    const int k = ws.blocks[b].offset + 2;
-    if (std::abs(y[k] - given[k]) > kAssemblyTurnWarning) turned.push_back({std::abs(y[k] - given[k]), b});
+    if (body.flexible()) continue;
+    const int o = ws.blocks[b].offset;
+    kind_of(body).initial(body, given.data() + o, nullptr);
+    const Vec2 at(given[o], given[o + 1]);
+    const double phi = body.type == BodyType::rigid ? given[o + 2] : 0.0;
+    extend(at);
+    for (const Marker& m : body.markers) extend(at + rotation(phi) * m.s_P_B);
   }
-  if (!turned.empty()) {
-    // The body turned most first, then the others (most turned first, in model order on ties).
-    std::stable_sort(turned.begin(), turned.end(),
+  for (const Joint& j : model.joints)
+    for (const PointRef* p : {&j.a, &j.b})
+      if (p->body == kGround) extend(p->s);
+  const double size = std::max((hi - lo).norm(), kAssemblyMoveFloor);
+  std::vector<std::pair<double, int>> turned, moved;  // (amount, body) beyond the warnings'
+  for (int b = 0; b < ws.nb; ++b) {
+    const Body& body = model.bodies[b];
+    if (body.flexible()) continue;
+    const int o = ws.blocks[b].offset;
+    if (body.type == BodyType::rigid && std::abs(y[o + 2] - given[o + 2]) > kAssemblyTurnWarning)
+      turned.push_back({std::abs(y[o + 2] - given[o + 2]), b});
+    if (const double d = (y.segment<2>(o) - given.segment<2>(o)).norm(); d > kAssemblyMoveWarning * size)
+      moved.push_back({d, b});
+  }
+  // "body 'a': assembly <verb> it A<unit> from its given <what> (and body 'b' B, ...<unit>)":
+  // the body changed most first (model order on ties).
+  auto bodies = [&](std::vector<std::pair<double, int>> list, const char* verb, double scale,
+                    const char* unit, const char* what) {
+    std::stable_sort(list.begin(), list.end(),
                      [](const auto& a, const auto& b) { return a.first > b.first; });
     std::ostringstream s;
     s.precision(3);
-    s << "body '" << model.bodies[turned[0].second].name << "': assembly turned it "
-      << turned[0].first * 180.0 / M_PI << " degrees from its given angle";
-    for (size_t i = 1; i < turned.size(); ++i)
-      s << (i == 1 ? " (and body '" : ", body '") << model.bodies[turned[i].second].name << "' "
-        << turned[i].first * 180.0 / M_PI << (i + 1 == turned.size() ? " degrees)" : "");
-    s << " to satisfy every joint and driver; check the markers and poses (a redundant joint "
-      << "whose markers close the loop only approximately is satisfied only at isolated "
-      << "positions)";
+    s << "body '" << model.bodies[list[0].second].name << "': assembly " << verb << " it "
+      << list[0].first * scale << unit << " from its given " << what;
+    for (size_t i = 1; i < list.size(); ++i)
+      s << (i == 1 ? " (and body '" : ", body '") << model.bodies[list[i].second].name << "' "
+        << list[i].first * scale << (i + 1 == list.size() ? std::string(unit) + ")" : "");
+    return s.str();
+  };
+  if (!turned.empty())
+    ws.warnings.push_back(bodies(turned, "turned", 180.0 / M_PI, " degrees", "angle") +
+                          " to satisfy every joint and driver; check the markers and poses (a "
+                          "redundant joint whose markers close the loop only approximately is "
+                          "satisfied only at isolated positions)");
+  if (!moved.empty()) {
+    std::ostringstream s;
+    s.precision(3);
+    s << bodies(moved, "moved", 1.0, " m", "position") << ", more than "
+      << 100 * kAssemblyMoveWarning << " % of the mechanism's size (" << size
+      << " m across its given positions and markers), to satisfy every joint and driver; check "
+      << "the poses and their units";
     ws.warnings.push_back(s.str());
-  }
-  // A body (rigid or point mass) that assembly moved far from its given position, against the
-  // mechanism's size: the extent of the given positions and markers (ground's origin and the
-  // ground points of joints among them). A pose given in the wrong unit or for another configuration (the slider of a
-  // slider-crank given 0.34 m off its guide's reach) was moved there without a word.
-  {
-    std::vector<Vec2> at, extent{Vec2::Zero()};  // given positions; and markers, in the world
-    for (int b = 0; b < ws.nb; ++b) {
-      const Body& body = model.bodies[b];
-      if (body.flexible()) continue;
-      kind_of(body).initial(body, given.data() + ws.blocks[b].offset, nullptr);
-      const int o = ws.blocks[b].offset;
-      at.emplace_back(given[o], given[o + 1]);
-      extent.push_back(at.back());
-      const double phi = body.type == BodyType::rigid ? given[o + 2] : 0.0;
-      for (const Marker& m : body.markers)
-        extent.push_back(at.back() + rotation(phi) * m.s_P_B);
-    }
-    for (const Joint& j : model.joints)  // the ground's points the joints use
-      for (const PointRef* p : {&j.a, &j.b})
-        if (p->body == kGround) extent.push_back(p->s);
-    // The diagonal of their bounding box (at most 1.42 times the largest distance between two),
-    // and at least kAssemblyMoveFloor: a body alone at the origin moved 1e-6 m by its driver was
-    // "more than 10 % of 0 m".
-    Vec2 lo = extent[0], hi = extent[0];
-    for (const Vec2& p : extent) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
-    const double size = std::max((hi - lo).norm(), kAssemblyMoveFloor);
-    std::vector<std::pair<double, int>> moved;
-    for (int b = 0, i = 0; b < ws.nb; ++b) {
-      if (model.bodies[b].flexible()) continue;
-      const int o = ws.blocks[b].offset;
-      const double d = (Vec2(y[o], y[o + 1]) - at[i++]).norm();
-      if (d > kAssemblyMoveWarning * size) moved.push_back({d, b});
-    }
-    if (!moved.empty()) {
-      std::stable_sort(moved.begin(), moved.end(),
-                       [](const auto& a, const auto& b) { return a.first > b.first; });
-      std::ostringstream s;
-      s.precision(3);
-      s << "body '" << model.bodies[moved[0].second].name << "': assembly moved it "
-        << moved[0].first << " m from its given position";
-      for (size_t i = 1; i < moved.size(); ++i)
-        s << (i == 1 ? " (and body '" : ", body '") << model.bodies[moved[i].second].name << "' "
-          << moved[i].first << (i + 1 == moved.size() ? " m)" : "");
-      s << ", more than " << 100 * kAssemblyMoveWarning << " % of the mechanism's size ("
-        << size << " m across its given positions and markers), to satisfy every joint and "
-        << "driver; check the poses and their units";
-      ws.warnings.push_back(s.str());
-    }
   }
   return y;
 }
