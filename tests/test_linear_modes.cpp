@@ -110,13 +110,12 @@ TEST(LinearModes, ADrivenMechanismHeldByItsDriversHasNoFreedom) {
   EXPECT_TRUE(lm.modes.empty());
 }
 
-}  // namespace
-}  // namespace lash::test
 
 TEST(LinearModes, AShortRodFarFromTheOriginSwingsAtItsOwnFrequency) {
   // A point mass on a 1e-4 m distance joint, pivoted at x = 0 and at x = 1 m: √(g/L)/(2π) =
   // 49.85 Hz at both. At x = 1 m it was 36.47 Hz: the row's gradient d/L at the configurations
-  // drawn for Φ_q's pattern made its pivot there 1e10 times its own, and it was softened.
+  // drawn for Φ_q's pattern made its pivot there 1e10 times its own, and it was softened. And
+  // at every x it was 49.8464 Hz: a fixed difference step of 1e-6 m is 1 % of the rod.
   for (const double x : {0.0, 1.0, 100.0}) {
     char yaml[400];
     std::snprintf(yaml, sizeof yaml, R"Y(
@@ -128,9 +127,77 @@ joints:
   rod: {type: distance, from: ground.P, to: bob}
 solver: {end_time: 1}
 )Y", x, x);
-    const lash::LinearModes modes =
-        lash::linear_modes(lash::load_model_text(yaml, "bob.yaml").model);
+    const LinearModes modes =
+        linear_modes(load_model_text(yaml, "bob.yaml").model);
     ASSERT_EQ(modes.modes.size(), 1u) << x;
-    EXPECT_NEAR(modes.modes[0].frequency, std::sqrt(9.81 / 1e-4) / (2 * M_PI), 5e-3) << x;
+    const double f = std::sqrt(9.81 / 1e-4) / (2 * M_PI);
+    EXPECT_NEAR(modes.modes[0].frequency, f, 1e-7 * f) << x;
   }
 }
+
+TEST(LinearModes, AFlexibleRodBetweenAHeldCrankAndASliderHasItsClosedFormModes) {
+  // The flexible-rod slider-crank example, undamped, its rod in 16 elements, the crank held: the
+  // rod is pinned at the crank and pinned at B to the slider on its guide, so it bends as a
+  // simply supported beam, ω_n = (nπ)² √(EI/(ρA L⁴)), and stretches with the slider as an end
+  // mass, x tan x = m_rod/m_slider, ω = (x/L) √(E/ρ) (Blevins, Formulas for Natural Frequency
+  // and Mode Shape, Tables 8-1 and 12-1). The linearised matrix spans 1e8 to 1e13 1/s²: before
+  // it was balanced, its eigenvalues carried the difference quotients' error (3 236–3 270 Hz
+  // for the first mode as the step changed, "unstable" roots at 16 elements), and a tableau
+  // begun at too large a step lost the axial mode (7 359 Hz).
+  std::string text = read_file(example_path("flores_slider_crank_flexible_rod.yaml"));
+  for (const auto& [from, to] : {std::pair<std::string, std::string>{"elements: 4\n", "elements: 16\n"},
+                                 {"damping: 1.0e-6 ", "damping: 0 "}}) {
+    const size_t at = text.find(from);
+    ASSERT_NE(at, std::string::npos) << from;
+    text.replace(at, from.size(), to);
+  }
+  const LinearModes lm = linear_modes(load_model_text(text, "rod16.yaml").model);
+  ASSERT_GE(lm.modes.size(), 3u);
+  const double e = 207e9, length = 0.12, rho_a = 0.21 / length;
+  const double inertia = 0.0112 * 0.020 * 0.020 * 0.020 / 12, area = 0.0112 * 0.020;
+  const double bending = std::sqrt(e * inertia / (rho_a * std::pow(length, 4))) / (2 * M_PI);
+  double lo = 0.5, hi = 1.5;  // x tan x = 1.5 on (0, π/2)
+  for (int i = 0; i < 100; ++i) {
+    const double x = 0.5 * (lo + hi);
+    (x * std::tan(x) > 0.21 / 0.14 ? hi : lo) = x;
+  }
+  const double axial = lo / length * std::sqrt(e / (rho_a / area)) / (2 * M_PI);  // 6 746.7 Hz
+  EXPECT_NEAR(lm.modes[0].frequency, M_PI * M_PI * bending, 1e-4 * M_PI * M_PI * bending);
+  EXPECT_NEAR(lm.modes[1].frequency, axial, 1e-5 * axial);
+  EXPECT_NEAR(lm.modes[2].frequency, 4 * M_PI * M_PI * bending, 1e-4 * 4 * M_PI * M_PI * bending);
+  for (const LinearMode& mode : lm.modes) EXPECT_NEAR(mode.damping_ratio, 0.0, 1e-6);
+  for (double r : lm.real_rates) EXPECT_LE(r, 1e-6);  // nothing unstable
+}
+
+TEST(LinearModes, ASlenderCantileversModesAreItsMeshsOwnToFiveDigits) {
+  // A 1 m steel strip 0.5 mm thick clamped at one end: axial stiffness over bending stiffness
+  // 12 L²/h² = 4.8e7, so the linearised matrix spans about 1e1 to 1e11 1/s². A fixed difference
+  // step carried its error into the first mode: 0.416277 Hz
+  // against the mesh's 0.416092 (beam::modes, a symmetric generalised eigenproblem, computed
+  // independently), with a step of 1e-6. Every mode below 1 kHz agrees to 1e-5.
+  const Model m = load_model_text(R"Y(
+ground: {markers: {A: [0, 0]}}
+bodies:
+  strip:
+    position: [0.5, 0]
+    markers: {A: [-0.5, 0], B: [0.5, 0]}
+    flexible: {length: 1.0, elements: 8, section: {rectangle: [0.02, 0.0005]}, youngs_modulus: 207e9, density: 7800}
+joints:
+  clamp: {type: fixed, base: ground.A, attached: strip.A}
+solver: {end_time: 1.0}
+)Y", "strip.yaml").model;
+  const LinearModes lm = linear_modes(m);
+  const std::vector<beam::Mode> own = beam::modes(m.bodies[0].mesh, beam::Support::clamped);
+  ASSERT_EQ(lm.modes.size(), own.size());
+  int checked = 0;
+  for (size_t k = 0; k < own.size(); ++k) {
+    const double f = own[k].omega / (2 * M_PI);
+    if (f > 1000.0) continue;
+    EXPECT_NEAR(lm.modes[k].frequency, f, 1e-5 * f) << "mode " << k + 1;
+    ++checked;
+  }
+  EXPECT_GE(checked, 16);
+}
+
+}  // namespace
+}  // namespace lash::test

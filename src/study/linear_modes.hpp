@@ -30,8 +30,9 @@ inline constexpr double kCriticalShare = 1e-3;
 
 /// The mechanism's modes: `model` with every clearance joint made ideal and every driver holding
 /// its coordinate at its initial value, assembled (initial_state) and at rest. The Jacobian of
-/// the right-hand side (central differences) on a basis (n, 0), (0, n) of the tangent space
-/// (n spanning the null space of Φ_q) is exact there: with q̇ = 0 the linearised accelerations of
+/// the right-hand side (central differences extrapolated to a zero step, balanced before the
+/// eigenvalue solve) on a basis (n, 0), (0, n) of the tangent space (n spanning the null space
+/// of Φ_q) is exact there: with q̇ = 0 the linearised accelerations of
 /// tangent motions satisfy Φ_q δq̈ = 0. Gravity, springs, the links' elasticity and the
 /// constraints' curvature (a pendulum's restoring force) all enter. Throws std::runtime_error
 /// when the model cannot be assembled or evaluated.
