@@ -1172,6 +1172,22 @@ TEST(Cli, AnEmptyOutputFolderIsRefused) {
   fs::remove_all(dir);
 }
 
+TEST(Cli, AnOutputFolderNamedByAFileIsAMistakenOption) {
+  // `-o results.csv` (a file) was a failed write, exit 3 with "Not a directory".
+  const fs::path dir = temp_dir("o_file");
+  fs::create_directories(dir);
+  const fs::path file = dir / "results.csv";
+  std::ofstream(file) << "kept\n";
+  const std::string study = std::string(LASH_SOURCE_DIR) + "/studies/flores_clearance.yaml";
+  for (const std::string& cmd : {"run " + example(), "sweep " + study}) {
+    const Result r = run_lash(cmd + " -q -o " + file.string());
+    EXPECT_EQ(r.code, 2) << cmd << "\n" << r.out;
+    EXPECT_NE(r.out.find(file.string() + ": is a file, not a folder"), std::string::npos) << r.out;
+    EXPECT_EQ(lash::test::read_file(file.string()), "kept\n");
+  }
+  fs::remove_all(dir);
+}
+
 TEST(Cli, ChannelsThatNameNoPatternAreRefused) {
   // `--channels ','` wrote every channel, as if the option were not given.
   for (const std::string list : {",", " , ", ""}) {
@@ -1234,6 +1250,9 @@ TEST(Cli, AnalysisOptionsAreRangeChecked) {
       // The crank angle is in [0, 360): -30,30 selected 0..30 only; ±1e300 broke the figures.
       {"report --angle-range -30,30", "--angle-range -30,30: both angles must be numbers in [0, 360]"},
       {"report --angle-range -1e300,1e300", "--angle-range -1e+300,1e+300: both angles"},
+      // No interval: accepted, then "no output row lies in the window".
+      {"analyze --angle-range 10,10", "--angle-range 10,10: the two angles must differ"},
+      {"analyze --angle-range 360,0", "--angle-range 360,0: the two angles must differ"},
       // Sections and renormalisations without bound (1e-9 ran out of memory).
       {"analyze --period 1e-9", "--period 1e-09: shorter than the run's output interval (1e-05 s)"}};
   for (const auto& [args, message] : cases) {

@@ -654,6 +654,11 @@ TEST(ModelLoader, TheNumberOfOutputsIsBoundedBeforeRunning) {
   EXPECT_EQ(problems(with("output_interval: 1.0e-5", "output_interval: 1.0e-9")).size(), 1u);
   EXPECT_TRUE(problems(with("output_interval: 1.0e-5", "output_interval: 1.0e-9\n  max_outputs: 3.0e7")).empty());
   EXPECT_EQ(problems(kGood, {"solver.max_outputs=0.5"}).size(), 1u);
+  // A refused end_time is not compared with output_interval (its stand-in of 1 s gave "got 2 > 1").
+  d = problems(kGood, {"solver.end_time=-5", "solver.output_interval=2"});
+  ASSERT_EQ(d.size(), 1u);
+  EXPECT_NE(d[0].message.find("end_time must be > 0, got -5"), std::string::npos) << d[0].message;
+  EXPECT_EQ(problems(kGood, {"solver.end_time=1", "solver.output_interval=2"}).size(), 1u);
 }
 
 TEST(ModelLoader, RelativeToleranceIsOneTheErrorControlCanHonour) {
@@ -752,9 +757,11 @@ TEST(ModelLoader, OneMistakeIsOneProblemSayingWhatWasGiven) {
 
 TEST(ModelLoader, NumbersBelowTheSmallestNormalDoubleAreRefused) {
   // A mass of 1e-320 passed "> 0" and the run stopped at t = 0 ("not finite"); a Young's modulus
-  // of 1e-320 ran a link with no stiffness to the end. Refused at their keys; 0 stays 0.
+  // of 1e-320 ran a link with no stiffness to the end. Refused at their keys; 0 stays 0. A value
+  // below even the subnormals reads as 0: a mass of 1e-400 was answered "must be > 0, got 0".
   for (const char* bad : {"bodies.crank.mass=1e-320", "joints.gudgeon.journal_radius=4e-324",
-                          "bodies.rod.position=[0.11, -1e-310]", "gravity=[0, 1e-315]"}) {
+                          "bodies.rod.position=[0.11, -1e-310]", "gravity=[0, 1e-315]",
+                          "bodies.crank.mass=1e-400", "gravity=[0, -9.81e-999]"}) {
     auto d = problems(kGood, {bad});
     ASSERT_GE(d.size(), 1u) << bad;
     EXPECT_TRUE(d[0].message.find("below the smallest normal double") != std::string::npos ||
@@ -762,6 +769,7 @@ TEST(ModelLoader, NumbersBelowTheSmallestNormalDoubleAreRefused) {
         << d[0].message;
   }
   EXPECT_TRUE(problems(kGood, {"gravity=[0, 0]"}).empty());
+  EXPECT_TRUE(problems(kGood, {"gravity=[0.0e-5, -0e400]"}).empty());
   EXPECT_TRUE(problems(kGood, {"bodies.crank.mass=2.3e-308"}).empty());
 }
 

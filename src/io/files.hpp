@@ -80,7 +80,8 @@ double last_row_time(const std::string& path);
 class FolderLock {
  public:
   /// Creates `folder` if needed and locks it. Throws IoError when it cannot be created, and
-  /// std::invalid_argument naming the other process when another run holds the lock.
+  /// std::invalid_argument when it names a file, or naming the other process when another run
+  /// holds the lock.
   explicit FolderLock(const std::string& folder);
   FolderLock(const FolderLock&) = delete;
   FolderLock& operator=(const FolderLock&) = delete;

@@ -81,7 +81,18 @@ class Section {
 
   /// Not 0 and below the smallest normal double (1e-320): its arithmetic has lost its precision,
   /// and a stiffness or mass that small made runs that completed with nothing holding a link.
-  static bool subnormal(double v) { return v != 0.0 && std::abs(v) < std::numeric_limits<double>::min(); }
+  /// A value written as 1e-400 reads as 0 (below even the subnormals): it counts too ("mass must
+  /// be > 0, got 0" answered a mass that was given).
+  static bool subnormal(const YAML::Node& n, double v) {
+    if (v != 0.0) return std::abs(v) < std::numeric_limits<double>::min();
+    if (!n.IsScalar()) return false;
+    const std::string& text = n.Scalar();
+    for (char c : text) {
+      if (c == 'e' || c == 'E') break;
+      if (c >= '1' && c <= '9') return true;
+    }
+    return false;
+  }
   static bool usable(const YAML::Node& n) { return n.IsDefined() && n.IsMap(); }
   /// (An empty value's position is the next token's, often on a later line: not its own.)
   static bool has_position(const YAML::Node& n) {
@@ -153,7 +164,7 @@ class Section {
       r_.error(at(key), element_, "'" + key + "' must be a number" + units + ", got " + kind(n));
       return std::nullopt;
     }
-    if (subnormal(v)) {
+    if (subnormal(n, v)) {
       r_.error(n, element_, "'" + key + "' is " + n.Scalar() + ", below the smallest normal double (" +
                                 fmt_num(std::numeric_limits<double>::min()) +
                                 "), where arithmetic has lost its precision");
@@ -190,9 +201,9 @@ class Section {
     const YAML::Node n = node_[key];
     double x, y;
     if (n.IsSequence() && n.size() == 2 && YAML::convert<double>::decode(n[0], x) &&
-        YAML::convert<double>::decode(n[1], y) && (subnormal(x) || subnormal(y))) {
+        YAML::convert<double>::decode(n[1], y) && (subnormal(n[0], x) || subnormal(n[1], y))) {
       r_.error(at(key), element_, "'" + key + "' is [" + join_scalars(n) + "]: " +
-                                      (subnormal(x) ? n[0] : n[1]).Scalar() +
+                                      (subnormal(n[0], x) ? n[0] : n[1]).Scalar() +
                                       " is below the smallest normal double (" +
                                       fmt_num(std::numeric_limits<double>::min()) +
                                       "), where arithmetic has lost its precision");
@@ -425,7 +436,8 @@ class Loader {
       if (!kv.second.IsSequence() || kv.second.size() != 2 ||
           !YAML::convert<double>::decode(kv.second[0], x) ||
           !YAML::convert<double>::decode(kv.second[1], y) || !std::isfinite(x) ||
-          !std::isfinite(y) || Section::subnormal(x) || Section::subnormal(y)) {
+          !std::isfinite(y) || Section::subnormal(kv.second[0], x) ||
+          Section::subnormal(kv.second[1], y)) {
         r_.error(kv.second, s.element(),
                  "marker '" + mk.name + "' must be [x, y], finite numbers in body coordinates (m), got " +
                      (kv.second.IsSequence() ? "[" + Section::join_scalars(kv.second) + "]"
@@ -1178,7 +1190,11 @@ class Loader {
     }
     st.rtol = s.number("rtol", "", relative_tolerance).value_or(st.rtol);
     st.atol = s.number("atol", "", absolute_tolerance).value_or(st.atol);
+    const size_t problems_before = r_.list.size();
     st.end_time = s.required_number("end_time", " (s)", positive, 1.0);
+    // A refused end_time (its stand-in is 1 s) is not compared with output_interval: "-5" was
+    // followed by "output_interval must be <= end_time, got 2 > 1".
+    const bool end_time_given = r_.list.size() == problems_before;
     st.output_interval = s.number("output_interval", " (s)", positive).value_or(st.end_time / 1000);
     st.max_step = s.number("max_step", " (s)", non_negative).value_or(0.0);
     if (auto ms = s.number("max_steps", "", [](double v) {
@@ -1233,7 +1249,9 @@ class Loader {
           return v >= 1 && v <= 1e12 && v == std::floor(v) ? "" : "a whole number in [1, 1e12]";
         }))
       st.max_outputs = static_cast<long>(*mo);
-    if (st.output_interval > st.end_time) {
+    if (!end_time_given) {
+      // (said at end_time)
+    } else if (st.output_interval > st.end_time) {
       r_.error(s.at("output_interval"), "solver",
                "output_interval must be <= end_time, got " + fmt_num(st.output_interval) +
                    " > " + fmt_num(st.end_time));

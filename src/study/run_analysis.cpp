@@ -649,6 +649,11 @@ void check_options(const AnalysisOptions& o) {
       bad("--angle-range " + fmt_g(o.stats_angle0) + "," + fmt_g(o.stats_angle1),
           "both angles must be numbers in [0, 360] degrees (a range across 0 is written as "
           "300,60)");
+    // One angle twice selects no interval (a window T0 = T1 is refused too); 360 is 0.
+    else if (std::fmod(o.stats_angle0, 360.0) == std::fmod(o.stats_angle1, 360.0) &&
+             !(o.stats_angle0 == 0 && o.stats_angle1 == 360))
+      bad("--angle-range " + fmt_g(o.stats_angle0) + "," + fmt_g(o.stats_angle1),
+          "the two angles must differ (the whole turn is 0,360)");
   }
   if (!std::isfinite(o.period) || o.period < 0)
     bad("--period " + fmt_g(o.period), "expected a positive period in seconds");
