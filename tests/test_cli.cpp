@@ -488,6 +488,11 @@ TEST(Cli, TuneAbsorberRejectsBadInputWithExitTwo) {
       {"--frequency 25 --mass-ratio 0.05 --primary-mass 2 --attach absorber.P",
        "is on the body the snippet adds ('absorber')"},
       {"--mass-ratio 0.05 --primary-mass 2", "--frequency is required"},
+      // A name no model's body can have; an input below the normal doubles.
+      {"--frequency 25 --mass-ratio 0.05 --primary-mass 2 --attach time",
+       "--attach: 'time' is not a body a model can have (the name 'time' is reserved)"},
+      {"--frequency 25 --mass-ratio 0.05 --primary-mass 1e-320",
+       "--primary-mass: 1e-320 is below the smallest normal double"},
       {"--frequency 25 --mass-ratio abc --primary-mass 2", "--mass-ratio"},
   };
   for (const Case& c : cases) {
@@ -495,6 +500,16 @@ TEST(Cli, TuneAbsorberRejectsBadInputWithExitTwo) {
     EXPECT_EQ(r.code, 2) << c.args << "\n" << r.out;
     EXPECT_NE(r.out.find(c.message), std::string::npos) << c.args << "\n" << r.out;
   }
+}
+
+TEST(Cli, TuneAbsorberWarnsOfAnAbsorberHeavierThanTheMode) {
+  const Result heavy = run_lash("tune-absorber --frequency 25 --mass-ratio 3 --primary-mass 2");
+  EXPECT_EQ(heavy.code, 0) << heavy.out;
+  EXPECT_NE(heavy.out.find("warning: --mass-ratio 3: the absorber outweighs the mode's modal mass"),
+            std::string::npos) << heavy.out;
+  const Result usual = run_lash("tune-absorber --frequency 25 --mass-ratio 0.25 --primary-mass 2");
+  EXPECT_EQ(usual.code, 0) << usual.out;
+  EXPECT_EQ(usual.out.find("warning"), std::string::npos) << usual.out;
 }
 
 // Every option finite and > 0, but the design overflows or vanishes: exit 2 naming the options a
@@ -510,9 +525,13 @@ TEST(Cli, TuneAbsorberRejectsInputsWhoseDesignOverflows) {
        "ω_a² (N/m) comes out as inf"},
       {"--frequency 1e200 --mass-ratio 0.05 --primary-mass 2",
        "--frequency 1e+200, --mass-ratio 0.05, --primary-mass 2: the design's stiffness"},
-      {"--frequency 25 --mass-ratio 1e-320 --absorber-mass 1",
-       "--absorber-mass 1, --mass-ratio 1e-320: the design's primary_mass M = m_a / μ (kg) comes "
-       "out as inf"},
+      {"--frequency 25 --mass-ratio 1e-300 --absorber-mass 1e10",
+       "--absorber-mass 10000000000, --mass-ratio 1e-300: the design's primary_mass M = m_a / μ "
+       "(kg) comes out as inf"},
+      // Subnormal results (a design of 1e-322 kg and 1e-317 N/m was printed, exit 0).
+      {"--frequency 25 --mass-ratio 0.01 --primary-mass 1e-307",
+       "--mass-ratio 0.01, --primary-mass 1e-307: the design's absorber_mass m_a = μ M (kg) comes "
+       "out as 1e-309"},
       {"--frequency 25 --mass-ratio 1e-300 --primary-mass 1e-300",
        "--mass-ratio 1e-300, --primary-mass 1e-300: the design's absorber_mass m_a = μ M (kg) "
        "comes out as 0"},

@@ -6,11 +6,13 @@
 
 #include <cctype>
 #include <cmath>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <ostream>
 #include <stdexcept>
 
 #include "analysis/absorber.hpp"
+#include "core/finalize.hpp"
 
 namespace lash::cli {
 
@@ -20,6 +22,10 @@ namespace {
 void require_positive(const char* option, double v) {
   if (!(std::isfinite(v) && v > 0))
     throw std::invalid_argument(fmt::format("{}: expected a finite number > 0, got {}", option, v));
+  if (!std::isnormal(v))  // 1e-320 gave a design of subnormal numbers
+    throw std::invalid_argument(fmt::format(
+        "{}: {} is below the smallest normal double ({}), where arithmetic has lost its precision",
+        option, v, std::numeric_limits<double>::min()));
 }
 
 /// Throws unless `point` is a point reference on a moving body: BODY or BODY.MARKER.
@@ -40,6 +46,9 @@ void require_point(const std::string& point) {
         "--attach: expected a point on the vibrating link, got '{}' (on the ground an absorber "
         "does nothing)",
         point));
+  if (reserved_name(body))  // a model refuses a body of that name
+    throw std::invalid_argument(fmt::format(
+        "--attach: '{}' is not a body a model can have (the name '{}' is reserved)", point, body));
   if (body == "absorber")
     throw std::invalid_argument(fmt::format(
         "--attach: '{}' is on the body the snippet adds ('absorber'): the bushing would join it "
@@ -79,10 +88,10 @@ void require_finite_design(const AbsorberDesign& d, const std::string& frequency
       {"peak_amplification", d.peak_amplification, "sqrt(1 + 2/μ)", mass_ratio},
   };
   for (const Quantity& q : quantities)
-    if (!(std::isfinite(q.value) && q.value > 0))
+    if (!(std::isnormal(q.value) && q.value > 0))
       throw std::invalid_argument(fmt::format(
           "{}: the design's {} {} comes out as {}; expected inputs for which it is a finite "
-          "number > 0 (these are too large or too small to compute with)",
+          "number > 0 of normal size (these are too large or too small to compute with)",
           q.options, q.name, q.formula, q.value));
 }
 
@@ -176,6 +185,11 @@ int TuneAbsorberCommand::run(std::ostream& out, std::ostream& err) const {
     return 2;
   }
   const std::string yaml = yaml_snippet(d, attach_);
+  if (mass_ratio_ > 1.0)
+    err << "warning: --mass-ratio " << mass_ratio_
+        << ": the absorber outweighs the mode's modal mass (designs use about 0.01 to 0.25); the "
+           "two-mass model behind the tuning leaves out the link's other modes, which an absorber "
+           "this heavy moves too\n";
 
   if (json_) {
     nlohmann::ordered_json j;

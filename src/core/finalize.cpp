@@ -56,7 +56,6 @@ class Checker {
   void names() {
     // Names are unique within a kind (a driver names its joint by name) and never a reserved
     // prefix; channel names across kinds are checked once the model is laid out (finalize).
-    const std::set<std::string> reserved{"ground", "energy", "constraint", "time"};
     auto check = [&](const std::string& kind, const auto& list) {
       std::set<std::string> seen;
       for (const auto& x : list) {
@@ -69,7 +68,7 @@ class Checker {
                           n + "'");
             break;
           }
-        if (reserved.count(n)) error(el, "the name '" + n + "' is reserved");
+        if (reserved_name(n)) error(el, "the name '" + n + "' is reserved");
         if (!seen.insert(n).second) error(el, "a second " + kind + " named '" + n + "'");
       }
     };
@@ -396,6 +395,10 @@ std::vector<ModelProblem> name_clashes(const Model& model,
 
 InvalidModel::InvalidModel(std::vector<ModelProblem> problems)
     : std::invalid_argument(join_problems(problems)), problems_(std::move(problems)) {}
+
+bool reserved_name(const std::string& name) {
+  return name == "ground" || name == "energy" || name == "constraint" || name == "time";
+}
 
 void finalize(Model& model) {
   if (model.finalized) return;

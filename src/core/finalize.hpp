@@ -26,6 +26,10 @@ class InvalidModel : public std::invalid_argument {
   std::vector<ModelProblem> problems_;
 };
 
+/// A name no element may take: ground, energy, constraint, time (they begin channel names and
+/// expressions of their own).
+bool reserved_name(const std::string& name);
+
 /// Validates `model` and fills its derived values, then marks it finalized:
 /// - contact stiffness K from the two materials when no stiffness is given (Hertz cylinder in
 ///   hole, core/contact_laws.hpp);
