@@ -387,6 +387,25 @@ TEST(Cli, AStatisticsWindowWithoutAnOutputRowKeepsItsExactExtrema) {
   fs::remove_all(fine);
 }
 
+TEST(Cli, AnalyzeOfAStoppedRunSaysWhatItLeavesOut) {
+  // A run stopped by max_steps before one period: analyze printed no Lyapunov line and no
+  // spectrum line at all, nothing saying why.
+  const fs::path dir = temp_dir("analyze_failed");
+  ASSERT_EQ(run_lash("run " + example() + " -q -o " + dir.string() + " --set solver.max_steps=2000").code, 1);
+  const Result r = run_lash("analyze " + dir.string() + " --fft slider.ax,crank.omega");
+  EXPECT_EQ(r.code, 1) << r.out;
+  for (const char* text :
+       {"Lyapunov exponents not computed: the run stopped at t = 0.00582",
+        "skipped: spectrum of slider.ax: 0 outputs after the transient (t >= 0.012 s), 16 needed",
+        "skipped: spectrum of crank.omega: 0 outputs"})
+    EXPECT_NE(r.out.find(text), std::string::npos) << text << "\n" << r.out;
+  // A constant channel is said to be one.
+  const Result c = run_lash("analyze " + dir.string() + " --discard 0 --no-lyapunov --fft crank.omega");
+  EXPECT_NE(c.out.find("skipped: spectrum of crank.omega: constant to 1e-9 of its magnitude"),
+            std::string::npos) << c.out;
+  fs::remove_all(dir);
+}
+
 TEST(Cli, ReportAndAnalyzeAnEarlierRun) {
   const fs::path dir = temp_dir("analyze");
   ASSERT_EQ(run_lash("run " + example() + " -q -o " + dir.string()).code, 0);
@@ -1019,10 +1038,15 @@ TEST(Cli, AWriteErrorStopsTheRunWithExitThreeAndWholeRows) {
   EXPECT_EQ(an.code, 2) << an.out;
   EXPECT_NE(an.out.find("could not be written"), std::string::npos) << an.out;
   EXPECT_EQ(an.out.find("--from"), std::string::npos) << an.out;
-  // An output folder that cannot be made (a character device): exit 3, named.
+  // An output folder that cannot be made (under /proc): exit 3, named; one that names a
+  // character device is a mistaken option, exit 2.
+  const Result proc = run_lash("run " + example() + " -q -o /proc/lash_cannot_be_made");
+  EXPECT_EQ(proc.code, 3) << proc.out;
+  EXPECT_NE(proc.out.find("/proc/lash_cannot_be_made: cannot create the output folder"),
+            std::string::npos) << proc.out;
   const Result dev = run_lash("run " + example() + " -q -o /dev/full");
-  EXPECT_EQ(dev.code, 3) << dev.out;
-  EXPECT_NE(dev.out.find("/dev/full: cannot create the output folder"), std::string::npos) << dev.out;
+  EXPECT_EQ(dev.code, 2) << dev.out;
+  EXPECT_NE(dev.out.find("/dev/full: exists and is not a folder"), std::string::npos) << dev.out;
   // A limit below summary.json's size (18 blocks): no summary can be written, and the rows are
   // kept (a file-size limit is per file: removing rows would make no room for it). They were
   // all removed, for nothing.
@@ -1201,7 +1225,7 @@ TEST(Cli, AnOutputFolderNamedByAFileIsAMistakenOption) {
   for (const std::string& cmd : {"run " + example(), "sweep " + study}) {
     const Result r = run_lash(cmd + " -q -o " + file.string());
     EXPECT_EQ(r.code, 2) << cmd << "\n" << r.out;
-    EXPECT_NE(r.out.find(file.string() + ": is a file, not a folder"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find(file.string() + ": exists and is not a folder"), std::string::npos) << r.out;
     EXPECT_EQ(lash::test::read_file(file.string()), "kept\n");
   }
   fs::remove_all(dir);

@@ -245,8 +245,11 @@ int main(int argc, char** argv) {
     sub->add_option("--poincare", poincare_driver,
                     "Stroboscopic Poincaré section once per period of this constant-speed "
                     "driver (default: the first one)");
-    sub->add_option("--fft", fft_channels, "Amplitude spectrum of these channels, e.g. slider.ax")
-        ->take_all();
+    sub->add_option("--fft", fft_channels,
+                    "Amplitude spectrum of these channels, e.g. slider.ax rod_slider.Fn (or "
+                    "comma-separated, as --channels)")
+        ->take_all()
+        ->delimiter(',');
     sub->add_flag("--no-lyapunov", no_lyapunov,
                   "Skip the Lyapunov exponents (computed by default, since the verdict needs "
                   "them)");
@@ -512,11 +515,6 @@ int main(int argc, char** argv) {
           fmt::print(" {:.6g} Hz ({:.4g})", peaks[k].second, peaks[k].first);
         fmt::print("\n");
       }
-      for (const auto& name : fft_channels)
-        if (!an["spectra"].contains(name))
-          fmt::print("spectrum {}: none (fewer than 16 outputs after the transient: lower "
-                     "--discard or run longer; or the channel is constant to 1e-9 of its "
-                     "magnitude)\n", name);
       if (an["lyapunov"].is_object() && an["lyapunov"]["exponent"].is_null() &&
           !an["lyapunov"]["message"].get<std::string>().empty())
         fmt::print("Lyapunov exponents not computed: {}\n",

@@ -217,7 +217,7 @@ FolderLock::FolderLock(const std::string& folder) {
   std::error_code ec;
   // A folder named by an existing file is a mistaken option (exit 2), not a failed write.
   if (std::filesystem::exists(folder, ec) && !std::filesystem::is_directory(folder, ec))
-    throw std::invalid_argument(folder + ": is a file, not a folder; name a folder (it is "
+    throw std::invalid_argument(folder + ": exists and is not a folder; name a folder (it is "
                                 "created if missing)");
   std::filesystem::create_directories(folder, ec);
   if (ec) throw IoError(folder, "cannot create the output folder: " + ec.message());

@@ -1127,16 +1127,28 @@ RunAnalysis analyze_samples(const Model& model, const AnalysisOptions& o, Plan& 
   int off_harmonic = -1;
   double broadband = std::nan("");
   for (size_t i = 0; i < sa.fft_index.size(); ++i) {
-    if (sa.fft_data[i].size() < 16) continue;
+    const std::string& name = sa.channels[sa.fft_index[i]].name;
+    if (sa.fft_data[i].size() < 16) {
+      out.provenance.skipped.push_back(
+          "spectrum of " + name + ": " + std::to_string(sa.fft_data[i].size()) +
+          " outputs after the transient (t >= " + fmt_g(p.t_discard) +
+          " s), 16 needed: lower --discard or run longer");
+      continue;
+    }
     // A channel constant to round-off (a constant-speed crank's ω) has only noise to show: no
     // spectrum, and no broadband share for the verdict.
     const auto [lo, hi] = std::minmax_element(sa.fft_data[i].begin(), sa.fft_data[i].end());
-    if (!(*hi - *lo > 1e-9 * std::max(std::abs(*lo), std::abs(*hi)))) continue;
+    if (!(*hi - *lo > 1e-9 * std::max(std::abs(*lo), std::abs(*hi)))) {
+      out.provenance.skipped.push_back("spectrum of " + name +
+                                       ": constant to 1e-9 of its magnitude after the transient "
+                                       "(round-off only)");
+      continue;
+    }
     const Spectrum spec = amplitude_spectrum(sa.fft_data[i], s.output_interval);
     if (i == 0 && p.period > 0) off_harmonic = non_harmonic_peaks(spec, 1.0 / p.period);
     if (i == 0) broadband = broadband_share(spec);
     ChannelSpectrum cs;
-    cs.channel = sa.channels[sa.fft_index[i]].name;
+    cs.channel = name;
     decimate_min_max(spec.frequency, spec.amplitude, o.spectrum_points, cs.frequency, cs.amplitude);
     cs.window = spec.window;
     cs.discarded_time = p.t_discard;
@@ -1180,6 +1192,12 @@ RunAnalysis analyze_samples(const Model& model, const AnalysisOptions& o, Plan& 
                   " s) needed: run longer or discard less";
       out.lyapunov = e;
     }
+  } else if (o.lyapunov && !out.result.status.ok) {
+    // A run that stopped early: said, as the other reasons are, not left out silently.
+    LyapunovEstimate e;
+    e.message = "the run stopped at t = " + fmt_g(out.result.status.t) +
+                " s before its end_time; the exponent is taken over a completed run";
+    out.lyapunov = e;
   } else if (o.lyapunov && out.result.status.ok && p.free_coordinates > 0) {
     // Asked for and the run completed, yet nothing to start from: said, not left out silently.
     LyapunovEstimate e;
@@ -1430,6 +1448,7 @@ RunAnalysis analyze_recorded_run(const Model& model, const AnalysisOptions& o, R
     prov.resimulated.push_back("Lyapunov exponent: " + lyapunov_provenance(*out.lyapunov) +
                                ", simulated now");
   if (const std::string none = no_statistics(out, o); !none.empty()) prov.skipped.push_back(none);
+  for (std::string& line : out.provenance.skipped) prov.skipped.push_back(std::move(line));
   out.provenance = std::move(prov);
   return out;
 }

@@ -258,7 +258,7 @@ struct RunAnalysis {
   std::optional<PoincareSections> poincare;   ///< absent without a period driver or a plane
   std::vector<ChannelSpectrum> spectra;       ///< channels with at least 16 samples after the transient
   std::vector<PhasePortrait> phase;
-  std::optional<LyapunovEstimate> lyapunov;   ///< absent if not asked for or not possible (no period, failed or short run)
+  std::optional<LyapunovEstimate> lyapunov;   ///< absent if not asked for; else the exponent, or its message says why there is none
   MotionVerdict verdict;
 };
 
