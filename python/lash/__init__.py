@@ -62,6 +62,10 @@ def _plain(value: Any) -> Any:
     """`value` with NumPy arrays and scalars (anything with `tolist`) as Python lists and
     numbers, through dicts, lists and tuples: the data a model file holds."""
     if isinstance(value, dict):
+        for k in value:  # a model file's keys are names: None or (1, 2) was written as "~" or "[1, 2]"
+            if not isinstance(k, str):
+                raise TypeError(f"a model's keys are names (str), got {_short(k)} "
+                                f"({type(k).__name__}) as a key")
         return {k: _plain(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
         return [_plain(v) for v in value]
@@ -206,6 +210,8 @@ class Model:
         """Use `lash.load(path)`, `lash.loads(text)` or `Model.new(name)` rather than this."""
         if text is not None:
             _string("text", text, "the text of a model file (str)")
+            if data is not None:  # the text was used and the data dropped without a word
+                raise ValueError("give a model's text or its data, not both")
         _string("filename", filename, "a file name for messages (str)")
         self._text = text
         self._data = data
@@ -339,10 +345,15 @@ class Model:
         return self
 
     def copy(self) -> "Model":
-        """An independent copy (its own overrides and data)."""
+        """An independent copy (its own overrides and data); copy.copy(model) makes the same (a
+        shallow copy shared the overrides list, so setting a value on one set it on both)."""
         import copy as _copy
-        return Model(self._text, filename=self.filename, data=_copy.deepcopy(self._data),
+        twin = Model(filename=self.filename, data=_copy.deepcopy(self._data),
                      overrides=self.overrides)
+        twin._text = self._text
+        return twin
+
+    __copy__ = copy
 
     def text(self) -> str:
         """The model file's text, overrides not applied."""
@@ -798,6 +809,9 @@ class Study:
         return len(self.rows)
 
     def __getitem__(self, column: str) -> np.ndarray:
+        if not isinstance(column, str):  # study[1] said "1: no run has it"
+            raise TypeError(f"study[...] takes a column name (str), got {_short(column)} "
+                            f"({type(column).__name__}); one run's values are study.rows[i]")
         if self.rows and not any(column in row for row in self.rows):
             raise KeyError(f"{column!r}: no run has it; columns: {sorted(set().union(*self.rows))}")
         values = [row.get(column, math.nan) for row in self.rows]

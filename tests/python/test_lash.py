@@ -540,6 +540,9 @@ def test_sweep_from_python_equals_the_cli(tmp_path):
     with pytest.raises(ValueError, match="pass resume=True"):
         lash.sweep(study, tmp_path / "py")
     assert len(lash.sweep(study, tmp_path / "py", resume=True, jobs=None)) == 3  # None: every core
+    with pytest.raises(TypeError, match=r"takes a column name \(str\), got 1 \(int\); one run's "
+                       r"values are study.rows\[i\]"):
+        s[1]  # was KeyError "1: no run has it"
     bad = tmp_path / "bad.yaml"
     bad.write_text(f"study: bad\nmodel: {FLORES}\nparameters: {{drivers.crank.speed_rpm: {{vals: [1]}}}}\n")
     with pytest.raises(lash.ModelError, match="bad.yaml:3"):
@@ -731,6 +734,28 @@ def test_model_data_keeps_names_that_look_like_numbers_and_edits_in_place_count(
     assert result.status["time"] == pytest.approx(0.002)
     data["description"] = 99999999999999999999  # a whole number of any size, never clamped
     assert lash.loads(lash._lash.emit_yaml(data)).data["description"] == 99999999999999999999
+
+
+def test_copies_are_independent_and_keys_are_names():
+    import copy
+    model = lash.load(FLORES)
+    for twin in (copy.copy(model), model.copy(), copy.deepcopy(model)):
+        twin.set("joints.rod_slider.clearance", 1e-4)  # copy.copy shared the overrides list
+        assert model.overrides == [] and len(twin.overrides) == 1
+        assert twin.text() == model.text()
+    built = lash.Model.new("m")
+    twin = copy.copy(built)
+    twin.add_body("b", mass=1.0)
+    assert "b" not in built.data["bodies"]
+    # Keys that are not names were written as "~" or "[1, 2]" into the model's text.
+    for key in (None, (1, 2), 3):
+        bad = lash.Model.new("m")
+        bad.data["bodies"][key] = {"mass": 1.0}
+        with pytest.raises(TypeError, match=r"a model's keys are names \(str\), got"):
+            bad.text()
+    # Text and data together: the data was dropped without a word.
+    with pytest.raises(ValueError, match="text or its data, not both"):
+        lash.Model("name: m\n", data={"name": "n"})
 
 
 def test_a_daemon_thread_still_simulating_at_exit_does_not_abort():
