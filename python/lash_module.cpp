@@ -208,6 +208,22 @@ std::vector<std::string> clearance_joint_names(const lash::Model& m) {
   return names;
 }
 
+/// `work` run as run_interruptible runs it, and a failure of the model itself (no consistent
+/// initial state) named with its file and the element's line, as `lash run` names it (lash
+/// analysis's "joint 'rod_slider': initial assembly failed ..." named no file).
+template <class R>
+R run_located(const CompiledModel& cm, const std::function<R()>& work, std::atomic<int>& interrupt) {
+  try {
+    return run_interruptible(work, interrupt);
+  } catch (const lash::ModelError&) {
+    throw;
+  } catch (const lash::IoError&) {
+    throw;
+  } catch (const std::runtime_error& e) {
+    throw std::runtime_error(cm.loaded.located(e.what()));
+  }
+}
+
 /// lash.simulate's engine: the model's solver settings from t = 0 to end_time.
 /// The state a run continues from: a final_state.json (a path, as `lash run --from`) or a
 /// Result's final_state dict (time, step, names, y, modes). Checked as `--from` checks it:
@@ -291,7 +307,7 @@ py::dict simulate(const CompiledModel& cm, const py::object& start) {
     options.from = from ? &*from : nullptr;
     return lash::simulate(model, ws, *collector, {}, {}, options);
   };
-  const lash::RunResult r = run_interruptible(work, interrupt);
+  const lash::RunResult r = run_located(cm, work, interrupt);
   py::dict d = run_result_dict(r);
   {
     // What y holds, entry by entry, and each clearance joint's contact mode (final_state.json's
@@ -398,7 +414,7 @@ py::dict analyze(const CompiledModel& cm, const py::dict& options) {
   const lash::AnalysisOptions ao = analysis_options(options, &interrupt);
   lash::check_options(ao);
   std::function<lash::RunAnalysis()> work = [&] { return lash::analyze_run(cm.loaded.model, ao); };
-  lash::RunAnalysis ra = run_interruptible(work, interrupt);
+  lash::RunAnalysis ra = run_located(cm, work, interrupt);
   py::dict d;
   d["result"] = run_result_dict(ra.result);
   d["period_driver"] = ra.period_driver;
@@ -749,6 +765,22 @@ PYBIND11_MODULE(_lash, m) {
           return d;
         },
         py::arg("db"), "lash::read_study: a study database as dicts.");
+  m.def("assemble",
+        [](const CompiledModel& cm) {
+          // As `lash check` assembles: its failure and warnings named with the file.
+          lash::Workspace ws(cm.loaded.model);
+          try {
+            lash::initial_state(cm.loaded.model, ws);
+          } catch (const std::runtime_error& e) {
+            throw std::runtime_error(cm.loaded.located(e.what()));
+          }
+          std::vector<std::string> warnings;
+          for (const std::string& w : ws.warnings) warnings.push_back(cm.loaded.located(w));
+          return warnings;
+        },
+        py::arg("model"),
+        "The model assembled at t = 0 as `lash check` does: its warnings (file-located); raises "
+        "RuntimeError when no consistent initial state exists.");
   m.def("simulate", &simulate, py::arg("model"), py::arg("start") = py::none(),
         "lash::simulate with an in-memory observer (from `start`: a final_state.json path or a "
         "Result's final_state dict); returns a dict of arrays.");

@@ -392,8 +392,13 @@ class Model:
         return self._compiled
 
     def check(self) -> "Model":
-        """Validates the model (as `lash check`); raises ModelError listing every problem."""
-        self.compiled()
+        """Validates and assembles the model as `lash check` does: raises ModelError listing
+        every problem of the file, RuntimeError (file:line: element) when no initial state
+        satisfies its joints and drivers, and issues what assembly warns of (a redundant joint
+        equation, a body moved far from its given pose) as Python warnings (UserWarning)."""
+        import warnings
+        for message in _lash.assemble(self.compiled()):
+            warnings.warn(message, stacklevel=2)
         return self
 
     @property
@@ -777,8 +782,6 @@ def simulate(model: Model | str | os.PathLike, t_end: Optional[float] = None, *,
     except ValueError as e:  # a state that does not fit: as `--from` says it, in Python's terms
         raise ValueError(str(e).replace("raise it with --set solver.end_time=...",
                                         "give a later t_end")) from None
-    except RuntimeError as e:  # no consistent initial state: named with its file, as the CLI does
-        raise RuntimeError(f"{_message_name(model.filename)}: {e}") from None
     return Result(model, compiled, raw, model.overrides + extra)
 
 

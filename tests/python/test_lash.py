@@ -834,8 +834,17 @@ def test_an_assembly_failure_names_the_model_file(tmp_path):
                     "joints:\n  a: {type: revolute, journal: link.A, bearing: ground.O}\n"
                     "  b: {type: revolute, journal: link.B, bearing: ground.P}\n"
                     "solver: {end_time: 0.01}\n")
-    with pytest.raises(RuntimeError, match=rf"^{re.escape(str(path))}: "):
+    with pytest.raises(RuntimeError, match=rf"^{re.escape(str(path))}:6:6: joint 'b': initial "
+                       r"assembly failed"):
         lash.simulate(lash.load(path))
+    # lash.analysis named no file; Model.check() passed a model `lash check` refuses.
+    for call in (lambda: lash.analysis.analyze(lash.load(path)), lambda: lash.load(path).check()):
+        with pytest.raises(RuntimeError, match=rf"^{re.escape(str(path))}:6:6: joint 'b'"):
+            call()
+    # What assembly warns of, check() issues as a Python warning, as `lash check` prints it.
+    moved = lash.load(FLORES).set("bodies.slider.position", [0.5, 0.0])
+    with pytest.warns(UserWarning, match=r"body 'slider': assembly moved it 0\.33 m"):
+        moved.check()
 
 
 
