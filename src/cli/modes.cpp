@@ -75,6 +75,7 @@ int print_modes(const Model& model, int count, std::ostream& out) {
            "bodies they hold shift them)\n";
   }
   if (links == 0) out << "no flexible links in this model (give a body a 'flexible:' map)\n";
+  out.flush();  // the mechanism's modes take a while on a fine mesh: the tables are out first
   const LinearModes lm = linear_modes(model);
   out << "the mechanism, linearised at its initial configuration (clearance joints ideal, drivers "
          "holding their coordinates, at rest): " << lm.dof << " degree" << (lm.dof == 1 ? "" : "s")

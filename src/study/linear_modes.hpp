@@ -1,7 +1,8 @@
 #pragma once
 /// @file linear_modes.hpp
 /// Natural frequencies of a mechanism linearised at its initial configuration (clearance joints
-/// ideal, drivers holding their coordinates, at rest): the eigenvalues of the right-hand side's
+/// ideal, drivers holding their coordinates where their motions start, at rest, no constraint
+/// stabilisation): the eigenvalues of the right-hand side's
 /// Jacobian restricted to the tangent space of the constraints (docs/analysis.md, "Linearised
 /// mechanism").
 #include <complex>
