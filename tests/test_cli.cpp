@@ -116,6 +116,30 @@ TEST(Cli, CheckAcceptsTheExamples) {
             std::string::npos) << tmd.out;
 }
 
+TEST(Cli, ModesAtTheStaticEquilibriumSaysWhereItLies) {
+  const fs::path dir = temp_dir("modes_eq");
+  fs::create_directories(dir);
+  const std::string hanging =
+      "gravity: [0, -9.81]\nground: {markers: {A: [0, 0]}}\n"
+      "bodies: {block: {mass: 2.0, inertia: 0.01, position: [0, -0.3]}}\n"
+      "joints: {guide: {type: translational, guide: ground.A, slider: block, axis: [0, 1]}}\n"
+      "loads: {spring: {type: spring_damper, from: ground.A, to: block, stiffness: 800, "
+      "free_length: 0.3}}\nsolver: {end_time: 1}\n";
+  std::ofstream(dir / "hanging.yaml") << hanging;
+  const Result r = run_lash("modes " + (dir / "hanging.yaml").string() + " --equilibrium");
+  EXPECT_EQ(r.code, 0) << r.out;
+  for (const char* text : {"the static equilibrium nearest the initial configuration",
+                           "largest coordinate change 0.0245 (block.y)",
+                           "linearised at its static equilibrium", "3.18"})
+    EXPECT_NE(r.out.find(text), std::string::npos) << text << "\n" << r.out;
+  // Without the spring there is none: exit 2, the file named.
+  std::ofstream(dir / "falling.yaml") << hanging.substr(0, hanging.find("loads:")) << "solver: {end_time: 1}\n";
+  const Result none = run_lash("modes " + (dir / "falling.yaml").string() + " --equilibrium");
+  EXPECT_EQ(none.code, 2) << none.out;
+  EXPECT_NE(none.out.find("falling.yaml: no static equilibrium found"), std::string::npos) << none.out;
+  fs::remove_all(dir);
+}
+
 TEST(Cli, ModesPrintsAFlexibleLinksFrequenciesBesideTheClosedForms) {
   const Result r =
       run_lash("modes " + lash::test::example_path("flores_slider_crank_flexible_rod.yaml") +

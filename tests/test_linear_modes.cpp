@@ -255,5 +255,78 @@ solver: {end_time: 1}
   EXPECT_NEAR(lm.modes[0].frequency, f, 1e-6 * f);
 }
 
+
+TEST(LinearModes, AtTheStaticEquilibriumAStringPendulumCarriesItsTension) {
+  // A 1 m steel wire (2 mm, a flexible link) pinned at the top, a 1 kg bob pinned at its end.
+  // Unstrained, as given, the wire carries no tension and the swing has no stiffness (about
+  // 2e-5 Hz); at the static equilibrium it is stretched by the weight (m g / EA ≈ 1.5e-5) and
+  // swings as the rigid compound pendulum, ω² = g (m_b + m_w/2) L / ((m_b + m_w/3) L²).
+  const Model m = load_model_text(R"Y(
+gravity: [0, -9.81]
+ground: {markers: {O: [0, 0]}}
+bodies:
+  wire:
+    position: [0, -0.5]
+    angle_deg: -90
+    markers: {A: [-0.5, 0], B: [0.5, 0]}
+    flexible: {length: 1.0, elements: 4, section: {circle: 0.002}, youngs_modulus: 207e9, density: 7800}
+  bob: {mass: 1.0, position: [0, -1.0]}
+joints:
+  top: {type: revolute, journal: wire.A, bearing: ground.O}
+  end: {type: revolute, journal: bob, bearing: wire.B}
+solver: {end_time: 1}
+)Y", "wire.yaml").model;
+  const LinearModes slack = linear_modes(m);
+  ASSERT_FALSE(slack.modes.empty());
+  EXPECT_LT(slack.modes[0].frequency, 1e-3);
+  EXPECT_FALSE(slack.equilibrium);
+  const LinearModes taut = linear_modes(m, true);
+  ASSERT_TRUE(taut.equilibrium);
+  ASSERT_FALSE(taut.modes.empty());
+  const double mw = 7800 * M_PI * 0.001 * 0.001 * 1.0, mb = 1.0;
+  const double f = std::sqrt(9.81 * (mb + mw / 2) / (mb + mw / 3)) / (2 * M_PI);
+  EXPECT_NEAR(taut.modes[0].frequency, f, 2e-4 * f);
+  const double ea = 207e9 * M_PI * 0.001 * 0.001;
+  EXPECT_NEAR(taut.equilibrium->largest_change, 9.81 * (mb + mw) / ea, 0.05 * 9.81 * mb / ea);
+}
+
+TEST(LinearModes, AtTheStaticEquilibriumASpringHangsStretchedByTheWeight) {
+  // 2 kg on a vertical guide hanging on k = 800 N/m given at its free length: the equilibrium
+  // lies m g / k = 24.5 mm lower, and the frequency √(k/m) is the same there.
+  const Model m = load_model_text(R"Y(
+gravity: [0, -9.81]
+ground: {markers: {A: [0, 0]}}
+bodies:
+  block: {mass: 2.0, inertia: 0.01, position: [0, -0.3]}
+joints:
+  guide: {type: translational, guide: ground.A, slider: block, axis: [0, 1]}
+loads:
+  spring: {type: spring_damper, from: ground.A, to: block, stiffness: 800, damping: 0, free_length: 0.3}
+solver: {end_time: 1}
+)Y", "hanging.yaml").model;
+  const LinearModes lm = linear_modes(m, true);
+  ASSERT_TRUE(lm.equilibrium);
+  EXPECT_NEAR(lm.equilibrium->largest_change, 2.0 * 9.81 / 800, 1e-12);
+  EXPECT_EQ(lm.equilibrium->largest_change_coordinate, "block.y");
+  ASSERT_EQ(lm.modes.size(), 1u);
+  EXPECT_NEAR(lm.modes[0].frequency, 20.0 / (2 * M_PI), 1e-9);
+  // Without the spring nothing holds the block up: no equilibrium, said.
+  try {
+    linear_modes(load_model_text(R"Y(
+gravity: [0, -9.81]
+ground: {markers: {A: [0, 0]}}
+bodies:
+  block: {mass: 2.0, inertia: 0.01, position: [0, -0.3]}
+joints:
+  guide: {type: translational, guide: ground.A, slider: block, axis: [0, 1]}
+solver: {end_time: 1}
+)Y", "falling.yaml").model, true);
+    ADD_FAILURE() << "no equilibrium, yet none was said";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("no static equilibrium found near the initial configuration"),
+              std::string::npos) << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace lash::test

@@ -307,6 +307,10 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1, 100));
   modes->add_option("--set", overrides, "Override a model value, KEY.PATH=VALUE, repeatable")
       ->take_all();
+  bool at_equilibrium = false;
+  modes->add_flag("--equilibrium", at_equilibrium,
+                  "Linearise at the static equilibrium nearest the initial configuration (under "
+                  "gravity and the loads, drivers held) instead of at the initial configuration");
 
   const lash::cli::TuneAbsorberCommand tune_absorber(app);
   const lash::cli::SweepCommand sweep(app, argv);
@@ -391,7 +395,7 @@ int main(int argc, char** argv) {
 
   if (*modes) {
     try {
-      lash::cli::print_modes(model, mode_count, std::cout);
+      lash::cli::print_modes(model, mode_count, at_equilibrium, std::cout);
     } catch (const std::exception& e) {
       std::cerr << loaded.located(e.what()) << "\n";
       return 2;

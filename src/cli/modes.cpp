@@ -58,7 +58,7 @@ void table(const beam::Mesh& m, beam::Support support, int count, std::ostream& 
 
 }  // namespace
 
-int print_modes(const Model& model, int count, std::ostream& out) {
+int print_modes(const Model& model, int count, bool at_equilibrium, std::ostream& out) {
   int links = 0;
   for (const Body& b : model.bodies) {
     if (!b.flexible()) continue;
@@ -76,10 +76,22 @@ int print_modes(const Model& model, int count, std::ostream& out) {
   }
   if (links == 0) out << "no flexible links in this model (give a body a 'flexible:' map)\n";
   out.flush();  // the mechanism's modes take a while on a fine mesh: the tables are out first
-  const LinearModes lm = linear_modes(model);
-  out << "the mechanism, linearised at its initial configuration (clearance joints ideal, drivers "
-         "holding their coordinates, at rest): " << lm.dof << " degree" << (lm.dof == 1 ? "" : "s")
-      << " of freedom\n";
+  const LinearModes lm = linear_modes(model, at_equilibrium);
+  if (lm.equilibrium) {
+    const Equilibrium& e = *lm.equilibrium;
+    out << "the static equilibrium nearest the initial configuration (gravity and loads acting, "
+           "drivers holding their coordinates): " << e.newton_steps << " Newton step"
+        << (e.newton_steps == 1 ? "" : "s") << ", accelerations left " << std::setprecision(3)
+        << e.residual;
+    if (e.newton_steps > 0)
+      out << ", largest coordinate change " << e.largest_change << " ("
+          << e.largest_change_coordinate << ")";
+    out << std::setprecision(6) << "\n";
+  }
+  out << "the mechanism, linearised at its "
+      << (lm.equilibrium ? "static equilibrium" : "initial configuration")
+      << " (clearance joints ideal, drivers holding their coordinates, at rest): " << lm.dof
+      << " degree" << (lm.dof == 1 ? "" : "s") << " of freedom\n";
   if (!lm.modes.empty()) out << "    mode    f (Hz)        damping ratio\n";
   int shown = 0;
   for (const LinearMode& md : lm.modes) {

@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <sstream>
 #include <stdexcept>
 #include <vector>
 
@@ -105,9 +106,130 @@ void balance(Eigen::MatrixXd& A) {
   }
 }
 
+// An orthonormal basis of the null space of Φ_q at the last evaluation (all of q without
+// constraints): the tangent space of the constraints.
+Eigen::MatrixXd tangent_basis(const Workspace& ws) {
+  if (ws.m == 0) return Eigen::MatrixXd::Identity(ws.nq, ws.nq);
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(ws.phi_q, Eigen::ComputeFullV);
+  svd.setThreshold(1e-10);
+  return svd.matrixV().rightCols(ws.nq - static_cast<int>(svd.rank()));
+}
+
+// The first `columns` columns of A = Bᵀ J B on the basis B = [(n, 0), (0, n)] (n = `null`, the
+// tangent space at y): J b by central differences D(h) = (F(y + h b) − F(y − h b)) / 2h,
+// extrapolated to h → 0 (ridders_column). A fixed step cannot suit every mechanism: 1e-6 moved
+// a 1e-4 m pendulum 1 % of its length, and its 49.8488 Hz came out 49.8464.
+Eigen::MatrixXd reduced_jacobian(const Model& m, Workspace& ws, const Eigen::VectorXd& y,
+                                 const Eigen::MatrixXd& null, int columns) {
+  const int nq = ws.nq, dof = static_cast<int>(null.cols()), n2 = 2 * dof;
+  std::vector<double> f(ws.ny), fm(ws.ny);
+  Eigen::MatrixXd A(n2, columns);
+  for (int c = 0; c < columns; ++c) {
+    Eigen::VectorXd b = Eigen::VectorXd::Zero(ws.ny);
+    if (c < dof)
+      b.head(nq) = null.col(c);
+    else
+      b.segment(nq, nq) = null.col(c - dof);
+    auto difference = [&](double h, Eigen::VectorXd& d) {
+      const Eigen::VectorXd yp = y + h * b, ym = y - h * b;
+      if (!evaluate(m, ws, 0.0, yp.data(), f.data()) || !evaluate(m, ws, 0.0, ym.data(), fm.data()))
+        return false;
+      Eigen::VectorXd df(2 * nq);
+      for (int i = 0; i < 2 * nq; ++i) df[i] = (f[i] - fm[i]) / (2 * h);
+      d.resize(n2);
+      d.head(dof) = null.transpose() * df.head(nq);
+      d.tail(dof) = null.transpose() * df.tail(nq);
+      return true;
+    };
+    A.col(c) = ridders_column(difference);
+  }
+  return A;
+}
+
+// y moved onto Φ = 0 by Gauss–Newton steps of least norm (Φ_q's complete orthogonal
+// decomposition); false when an evaluation fails or the steps do not settle.
+bool onto_constraints(const Model& m, Workspace& ws, Eigen::VectorXd& y, std::vector<double>& f) {
+  const int nq = ws.nq;
+  for (int k = 0; k < 30; ++k) {
+    if (!evaluate(m, ws, 0.0, y.data(), f.data())) return false;
+    if (ws.m == 0) return true;
+    const Eigen::VectorXd step = ws.phi_q.completeOrthogonalDecomposition().solve(-ws.phi);
+    y.head(nq) += step;
+    if (step.cwiseAbs().maxCoeff() <= 1e-15 * (1.0 + y.head(nq).cwiseAbs().maxCoeff()))
+      return evaluate(m, ws, 0.0, y.data(), f.data());
+  }
+  return false;
+}
+
+// The static equilibrium nearest the assembled state y (at rest): Newton's method on the
+// accelerations in the tangent space, r(a) = Nᵀ q̈ = 0, with the tangent stiffness Nᵀ ∂q̈/∂q N
+// (reduced_jacobian's position columns), a step halved until |r| falls, and each trial put back
+// onto the constraints. Where the mechanism is free (a singular tangent stiffness) the step is
+// of least norm. Throws std::runtime_error when no equilibrium is found.
+Eigen::VectorXd static_equilibrium(const Model& m, Workspace& ws, Eigen::VectorXd y,
+                                   Equilibrium& info) {
+  constexpr int kSteps = 50;
+  const int nq = ws.nq;
+  const Eigen::VectorXd q0 = y.head(nq);
+  std::vector<double> f(ws.ny);
+  Eigen::MatrixXd null;
+  auto residual = [&](Eigen::VectorXd& yy, Eigen::VectorXd& r) {
+    if (!onto_constraints(m, ws, yy, f)) return false;
+    null = tangent_basis(ws);
+    r = null.transpose() * Eigen::Map<const Eigen::VectorXd>(f.data() + nq, nq);
+    return true;
+  };
+  Eigen::VectorXd r;
+  if (!residual(y, r)) throw std::runtime_error("the initial configuration cannot be evaluated");
+  const double scale = std::max({r.size() ? r.cwiseAbs().maxCoeff() : 0.0, m.gravity.norm(), 1e-300});
+  auto norm = [](const Eigen::VectorXd& v) { return v.size() ? v.cwiseAbs().maxCoeff() : 0.0; };
+  // Converged when the accelerations are 1e-10 of their first size (or of g), or when Newton's
+  // step no longer moves the coordinates beyond round-off: a stiff link's accelerations then
+  // stay at their round-off (3e-6 m/s² for a steel string, against 189 at the start).
+  int step = 0;
+  bool converged = norm(r) <= 1e-10 * scale;
+  for (; step < kSteps && !converged; ++step) {
+    const int dof = static_cast<int>(null.cols());
+    const Eigen::MatrixXd K = reduced_jacobian(m, ws, y, null, dof).bottomRows(dof);
+    const Eigen::VectorXd da = K.completeOrthogonalDecomposition().solve(-r);
+    const Eigen::VectorXd move = null * da;
+    if (move.cwiseAbs().maxCoeff() <= 1e-14 * (1.0 + y.head(nq).cwiseAbs().maxCoeff())) {
+      // A step too small to take, which would have removed what is left (round-off), or none
+      // because nothing stiffens the direction the load pushes (a block falling on its guide).
+      converged = norm(K * da + r) <= 0.5 * norm(r);
+      break;
+    }
+    bool accepted = false;
+    for (double share = 1.0; share >= 1.0 / 1024 && !accepted; share /= 2) {
+      Eigen::VectorXd trial = y, rt;
+      trial.head(nq) += share * move;
+      if (residual(trial, rt) && norm(rt) < norm(r)) y = std::move(trial), r = std::move(rt), accepted = true;
+    }
+    if (!accepted) break;
+    converged = norm(r) <= 1e-10 * scale;
+  }
+  if (!converged) {
+    std::ostringstream s;
+    s.precision(3);
+    s << "no static equilibrium found near the initial configuration: after " << step
+      << " Newton steps the accelerations at rest are still " << norm(r)
+      << " (m/s² or rad/s²); a direction with a load and nothing to balance it (a slider pushed "
+         "along its guide) has none";
+    throw std::runtime_error(s.str());
+  }
+  residual(y, r);  // ws at the equilibrium
+  info.newton_steps = step;
+  info.residual = norm(r);
+  const std::vector<std::string> names = state_names(m, ws);
+  for (int i = 0; i < nq; ++i)
+    if (const double d = std::abs(y[i] - q0[i]); d > info.largest_change)
+      info.largest_change = d, info.largest_change_coordinate = names[i];
+  return y;
+}
+
 }  // namespace
 
-LinearModes linear_modes(const Model& model) {
+LinearModes linear_modes(const Model& model, bool at_equilibrium) {
   Model m = ideal_model(model);
   {
     // Every driven coordinate held where it starts: at initial + f(0) (a position profile's
@@ -134,50 +256,18 @@ LinearModes linear_modes(const Model& model) {
   m.solver.baumgarte_alpha = m.solver.baumgarte_beta = 0.0;
   Workspace ws(m);
   Eigen::VectorXd y = initial_state(m, ws);
-  const int nq = ws.nq, ny = ws.ny;
+  const int nq = ws.nq;
   y.segment(nq, nq).setZero();
-  std::vector<double> f(ny), fm(ny);
+  LinearModes out;
+  if (at_equilibrium) y = static_equilibrium(m, ws, y, out.equilibrium.emplace());
+  std::vector<double> f(ws.ny);
   if (!evaluate(m, ws, 0.0, y.data(), f.data()))
     throw std::runtime_error("the initial configuration cannot be evaluated");
-
-  // The tangent space: the null space of Φ_q (all of q without constraints).
-  Eigen::MatrixXd null;
-  if (ws.m == 0) {
-    null = Eigen::MatrixXd::Identity(nq, nq);
-  } else {
-    Eigen::JacobiSVD<Eigen::MatrixXd> svd(ws.phi_q, Eigen::ComputeFullV);
-    svd.setThreshold(1e-10);
-    null = svd.matrixV().rightCols(nq - static_cast<int>(svd.rank()));
-  }
-  LinearModes out;
+  const Eigen::MatrixXd null = tangent_basis(ws);
   out.dof = static_cast<int>(null.cols());
   if (out.dof == 0) return out;
-
-  // A = Bᵀ J B on the basis B = [(n, 0), (0, n)], each column J b by central differences
-  // D(h) = (F(y + h b) − F(y − h b)) / 2h, extrapolated to h → 0 (ridders_column). A fixed
-  // step cannot suit every mechanism: 1e-6 moved a 1e-4 m pendulum 1 % of its length, and its
-  // 49.8488 Hz came out 49.8464.
   const int n2 = 2 * out.dof;
-  Eigen::MatrixXd A(n2, n2);
-  for (int c = 0; c < n2; ++c) {
-    Eigen::VectorXd b = Eigen::VectorXd::Zero(ny);
-    if (c < out.dof)
-      b.head(nq) = null.col(c);
-    else
-      b.segment(nq, nq) = null.col(c - out.dof);
-    auto difference = [&](double h, Eigen::VectorXd& d) {
-      const Eigen::VectorXd yp = y + h * b, ym = y - h * b;
-      if (!evaluate(m, ws, 0.0, yp.data(), f.data()) || !evaluate(m, ws, 0.0, ym.data(), fm.data()))
-        return false;
-      Eigen::VectorXd df(2 * nq);
-      for (int i = 0; i < 2 * nq; ++i) df[i] = (f[i] - fm[i]) / (2 * h);
-      d.resize(n2);
-      d.head(out.dof) = null.transpose() * df.head(nq);
-      d.tail(out.dof) = null.transpose() * df.tail(nq);
-      return true;
-    };
-    A.col(c) = ridders_column(difference);
-  }
+  Eigen::MatrixXd A = reduced_jacobian(m, ws, y, null, n2);
   balance(A);
   const Eigen::EigenSolver<Eigen::MatrixXd> es(A, false);
   if (es.info() != Eigen::Success) throw std::runtime_error("the eigenvalue solver failed");

@@ -6,6 +6,7 @@
 /// Jacobian restricted to the tangent space of the constraints (docs/analysis.md, "Linearised
 /// mechanism").
 #include <complex>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -19,10 +20,19 @@ struct LinearMode {
   std::complex<double> eigenvalue;  ///< λ, 1/s (the one with Im λ ≥ 0 of a pair)
 };
 
+/// Where `linear_modes(model, true)` found the static equilibrium.
+struct Equilibrium {
+  int newton_steps = 0;
+  double residual = 0.0;        ///< largest acceleration left in the tangent space, m/s² or rad/s²
+  double largest_change = 0.0;  ///< largest coordinate change from the assembled state, m or rad
+  std::string largest_change_coordinate;  ///< its name (state_names)
+};
+
 struct LinearModes {
   int dof = 0;                    ///< degrees of freedom (nq − rank Φ_q)
   std::vector<LinearMode> modes;  ///< ascending frequency; one per pair of eigenvalues
   std::vector<double> real_rates; ///< real eigenvalues (1/s): overdamped, static or unstable directions
+  std::optional<Equilibrium> equilibrium;  ///< set when linearised at the static equilibrium
 };
 
 /// A pair of eigenvalues with a damping ratio ζ ≥ 1 − kCriticalShare (|Im λ| below 4.5 % of
@@ -37,6 +47,10 @@ inline constexpr double kCriticalShare = 1e-3;
 /// tangent motions satisfy Φ_q δq̈ = 0. Gravity, springs, the links' elasticity and the
 /// constraints' curvature (a pendulum's restoring force) all enter. Throws std::runtime_error
 /// when the model cannot be assembled or evaluated.
-LinearModes linear_modes(const Model& model);
+/// With `at_equilibrium`, the linearisation is at the static equilibrium nearest the assembled
+/// initial configuration (drivers held, gravity and loads acting, at rest), found by Newton's
+/// method on the accelerations in the tangent space; it throws std::runtime_error when there is
+/// none (a load along a free direction).
+LinearModes linear_modes(const Model& model, bool at_equilibrium = false);
 
 }  // namespace lash
