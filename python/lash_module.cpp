@@ -37,6 +37,7 @@
 #include "io/model_loader.hpp"
 #include "io/results_writer.hpp"
 #include "io/state_file.hpp"
+#include "study/linear_modes.hpp"
 #include "study/run_analysis.hpp"
 #include "study/study_db.hpp"
 #include "study/sweep.hpp"
@@ -781,6 +782,41 @@ PYBIND11_MODULE(_lash, m) {
         py::arg("model"),
         "The model assembled at t = 0 as `lash check` does: its warnings (file-located); raises "
         "RuntimeError when no consistent initial state exists.");
+  m.def("linear_modes",
+        [](const CompiledModel& cm, bool at_equilibrium) {
+          std::atomic<int> interrupt{0};  // (not polled: the linearisation takes seconds at most)
+          std::function<lash::LinearModes()> work = [&] {
+            return lash::linear_modes(cm.loaded.model, at_equilibrium);
+          };
+          const lash::LinearModes lm = run_located(cm, work, interrupt);
+          py::dict d;
+          d["dof"] = lm.dof;
+          py::list modes;
+          for (const lash::LinearMode& mode : lm.modes) {
+            py::dict md;
+            md["frequency"] = mode.frequency;
+            md["damping_ratio"] = mode.damping_ratio;
+            md["eigenvalue"] = mode.eigenvalue;
+            modes.append(md);
+          }
+          d["modes"] = modes;
+          d["real_rates"] = lm.real_rates;
+          if (lm.equilibrium) {
+            py::dict e;
+            e["newton_steps"] = lm.equilibrium->newton_steps;
+            e["residual"] = lm.equilibrium->residual;
+            e["largest_change"] = lm.equilibrium->largest_change;
+            e["largest_change_coordinate"] = lm.equilibrium->largest_change_coordinate;
+            d["equilibrium"] = e;
+          } else {
+            d["equilibrium"] = py::none();
+          }
+          return d;
+        },
+        py::arg("model"), py::arg("at_equilibrium") = false,
+        "The mechanism linearised at rest (`lash modes`): dof, modes (frequency Hz, "
+        "damping_ratio, eigenvalue), real_rates (1/s), equilibrium (None, or where the static "
+        "equilibrium lies).");
   m.def("simulate", &simulate, py::arg("model"), py::arg("start") = py::none(),
         "lash::simulate with an in-memory observer (from `start`: a final_state.json path or a "
         "Result's final_state dict); returns a dict of arrays.");

@@ -15,7 +15,7 @@ import numpy as np
 
 from . import _lash, _flag, _integer, _real, _short, _string, _strings
 
-__all__ = ["analyze", "poincare", "verdict", "spectra", "spectrum", "amplitude_spectrum",
+__all__ = ["analyze", "poincare", "verdict", "spectra", "modes", "spectrum", "amplitude_spectrum",
            "count_distinct", "section_contraction", "classify_motion", "verdict_rule", "contact_modes",
            "decimate_min_max"]
 
@@ -187,6 +187,18 @@ def spectra(model, channels: Sequence[str] = (), discard_periods: int = 1) -> Di
     `model`, as analyze() computes them: {channel: {frequency (Hz), amplitude, ...}}."""
     return _run_analysis(model, {"fft_channels": "channels"}, ideal_twin=False, lyapunov=False,
                          fft_channels=channels, discard_periods=discard_periods)["spectra"]
+
+
+def modes(model, *, equilibrium: bool = False) -> Dict[str, Any]:
+    """Natural frequencies of `model` (Model, path or Result) linearised at rest, as `lash modes`
+    computes them: every clearance joint ideal, every driver holding its coordinate where its
+    motion starts, at the initial configuration or, with `equilibrium=True`, at the static
+    equilibrium nearest it (`lash modes --equilibrium`; RuntimeError when there is none).
+
+    Returns a dict: dof, modes (ascending: frequency Hz, damping_ratio, eigenvalue 1/s),
+    real_rates (1/s: free, overdamped or unstable directions), equilibrium (None, or
+    newton_steps, residual, largest_change, largest_change_coordinate)."""
+    return _lash.linear_modes(_model_of(model).compiled(), _flag("equilibrium", equilibrium))
 
 
 def spectrum(result, channel: str, *, t0: float = 0.0, window: str = "hann") -> Dict[str, Any]:

@@ -884,3 +884,30 @@ def test_a_run_continues_from_a_result_or_a_state_file(tmp_path):
         state = dict(half.final_state, **{key: value})
         with pytest.raises(error, match=f"^start: {re.escape(said)}"):
             lash.simulate(FLORES, t_end=0.012, start=state)
+
+
+def test_modes_as_lash_modes_computes_them():
+    # A point mass on a 1e-4 m distance joint: sqrt(g/L)/2pi; hanging on a spring given at its
+    # free length, at the static equilibrium: moved m g / k, sqrt(k/m) unchanged.
+    bob = lash.Model.new("bob", gravity=[0, -9.81])
+    bob.add_ground_marker("P", [0, 0])
+    bob.add_body("bob", mass=1.0, position=[0, -1e-4])
+    bob.add_joint("rod", "distance", **{"from": "ground.P", "to": "bob"})
+    bob.set_solver(end_time=1.0)
+    m = lash.analysis.modes(bob)
+    assert m["dof"] == 1 and m["equilibrium"] is None
+    assert m["modes"][0]["frequency"] == pytest.approx(math.sqrt(9.81 / 1e-4) / (2 * math.pi), rel=1e-7)
+    hanging = lash.loads("gravity: [0, -9.81]\nground: {markers: {A: [0, 0]}}\n"
+                         "bodies: {block: {mass: 2.0, inertia: 0.01, position: [0, -0.3]}}\n"
+                         "joints: {guide: {type: translational, guide: ground.A, slider: block, "
+                         "axis: [0, 1]}}\nloads: {spring: {type: spring_damper, from: ground.A, "
+                         "to: block, stiffness: 800, free_length: 0.3}}\nsolver: {end_time: 1}\n",
+                         "hanging.yaml")
+    e = lash.analysis.modes(hanging, equilibrium=True)
+    assert e["equilibrium"]["largest_change"] == pytest.approx(2 * 9.81 / 800, rel=1e-9)
+    assert e["equilibrium"]["largest_change_coordinate"] == "block.y"
+    assert e["modes"][0]["frequency"] == pytest.approx(20 / (2 * math.pi), rel=1e-9)
+    with pytest.raises(RuntimeError, match=r"^hanging.yaml: no static equilibrium found"):
+        lash.analysis.modes(hanging.copy().set("loads.spring.stiffness", 0), equilibrium=True)
+    with pytest.raises(TypeError, match="equilibrium"):
+        lash.analysis.modes(hanging, equilibrium="yes")
