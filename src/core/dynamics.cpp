@@ -1057,9 +1057,9 @@ Eigen::VectorXd initial_state(const Model& model, Workspace& ws) {
   };
   if (!turned.empty())
     ws.warnings.push_back(bodies(turned, "turned", 180.0 / M_PI, " degrees", "angle") +
-                          " to satisfy every joint and driver; check the markers and poses (a "
-                          "redundant joint whose markers close the loop only approximately is "
-                          "satisfied only at isolated positions)");
+                          " to satisfy every joint and driver; check the markers, the poses and "
+                          "any driver's initial value (a redundant joint whose markers close the "
+                          "loop only approximately is satisfied only at isolated positions)");
   if (!moved.empty()) {
     std::ostringstream s;
     s.precision(3);
