@@ -805,8 +805,10 @@ PYBIND11_MODULE(_lash, m) {
             py::dict e;
             e["newton_steps"] = lm.equilibrium->newton_steps;
             e["residual"] = lm.equilibrium->residual;
-            e["largest_change"] = lm.equilibrium->largest_change;
-            e["largest_change_coordinate"] = lm.equilibrium->largest_change_coordinate;
+            e["largest_move"] = lm.equilibrium->largest_move;
+            e["largest_move_coordinate"] = lm.equilibrium->largest_move_coordinate;
+            e["largest_turn"] = lm.equilibrium->largest_turn;
+            e["largest_turn_coordinate"] = lm.equilibrium->largest_turn_coordinate;
             d["equilibrium"] = e;
           } else {
             d["equilibrium"] = py::none();

@@ -129,7 +129,7 @@ TEST(Cli, ModesAtTheStaticEquilibriumSaysWhereItLies) {
   const Result r = run_lash("modes " + (dir / "hanging.yaml").string() + " --equilibrium");
   EXPECT_EQ(r.code, 0) << r.out;
   for (const char* text : {"the static equilibrium nearest the initial configuration",
-                           "largest coordinate change 0.0245 (block.y)",
+                           "largest move 0.0245 m (block.y)",
                            "linearised at its static equilibrium", "3.18"})
     EXPECT_NE(r.out.find(text), std::string::npos) << text << "\n" << r.out;
   // Without the spring there is none: exit 2, the file named.

@@ -287,7 +287,7 @@ solver: {end_time: 1}
   const double f = std::sqrt(9.81 * (mb + mw / 2) / (mb + mw / 3)) / (2 * M_PI);
   EXPECT_NEAR(taut.modes[0].frequency, f, 2e-4 * f);
   const double ea = 207e9 * M_PI * 0.001 * 0.001;
-  EXPECT_NEAR(taut.equilibrium->largest_change, 9.81 * (mb + mw) / ea, 0.05 * 9.81 * mb / ea);
+  EXPECT_NEAR(taut.equilibrium->largest_move, 9.81 * (mb + mw) / ea, 0.05 * 9.81 * mb / ea);
 }
 
 TEST(LinearModes, AtTheStaticEquilibriumASpringHangsStretchedByTheWeight) {
@@ -306,8 +306,8 @@ solver: {end_time: 1}
 )Y", "hanging.yaml").model;
   const LinearModes lm = linear_modes(m, true);
   ASSERT_TRUE(lm.equilibrium);
-  EXPECT_NEAR(lm.equilibrium->largest_change, 2.0 * 9.81 / 800, 1e-12);
-  EXPECT_EQ(lm.equilibrium->largest_change_coordinate, "block.y");
+  EXPECT_NEAR(lm.equilibrium->largest_move, 2.0 * 9.81 / 800, 1e-12);
+  EXPECT_EQ(lm.equilibrium->largest_move_coordinate, "block.y");
   ASSERT_EQ(lm.modes.size(), 1u);
   EXPECT_NEAR(lm.modes[0].frequency, 20.0 / (2 * M_PI), 1e-9);
   // Without the spring nothing holds the block up: no equilibrium, said.
@@ -325,6 +325,62 @@ solver: {end_time: 1}
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("no static equilibrium found near the initial configuration"),
               std::string::npos) << e.what();
+  }
+}
+
+
+TEST(LinearModes, AtTheStaticEquilibriumACantileverSagsAsBeamTheorySays) {
+  // A 1 m steel strip 5 mm thick clamped at one end, loaded by its weight w = ρ A g: the tip
+  // sags w L⁴ / (8 EI) = 22.2 mm. Judged by whether the accelerations fell, Newton's steps were
+  // halved to nothing (each bending step strains the link axially, to second order, which the
+  // next step removes), and no equilibrium was found.
+  const Model m = load_model_text(R"Y(
+gravity: [0, -9.81]
+ground: {markers: {A: [0, 0]}}
+bodies:
+  strip: {position: [0.5, 0], markers: {A: [-0.5, 0], B: [0.5, 0]},
+          flexible: {length: 1.0, elements: 8, section: {rectangle: [0.02, 0.005]}, youngs_modulus: 207e9, density: 7800}}
+joints: {clamp: {type: fixed, base: ground.A, attached: strip.A}}
+solver: {end_time: 1.0}
+)Y", "strip.yaml").model;
+  const LinearModes lm = linear_modes(m, true);
+  ASSERT_TRUE(lm.equilibrium);
+  const double w = 7800 * 0.02 * 0.005 * 9.81, ei = 207e9 * 0.02 * std::pow(0.005, 3) / 12;
+  EXPECT_EQ(lm.equilibrium->largest_move_coordinate, "strip.n8.y");
+  EXPECT_NEAR(lm.equilibrium->largest_move, w / (8 * ei), 0.005 * w / (8 * ei));
+}
+
+TEST(LinearModes, AtTheStaticEquilibriumAPendulumGoesToTheNearestOne) {
+  // A bar pinned at one end, started θ from hanging: below 90° it hangs (0.6105 Hz), past 90°
+  // the nearest equilibrium is the inverted one (real eigenvalues ±√(m g (L/2) / I_pin)). From
+  // 75° an unlimited Newton step (−tan 75° rad) went to the inverted position, from 89° ten
+  // turns round; at 90° (no stiffness) none was found.
+  const double i_pin = 0.045 + 0.54 * 0.25;
+  for (const double degrees : {30.0, 75.0, 89.0, 90.0, 120.0}) {
+    const double phi = -M_PI / 2 + degrees * M_PI / 180;
+    char yaml[500];
+    std::snprintf(yaml, sizeof yaml, R"Y(
+gravity: [0, -9.81]
+ground: {markers: {O: [0, 0]}}
+bodies:
+  bar: {mass: 0.54, inertia: 0.045, position: [%.17g, %.17g], angle: %.17g, markers: {A: [-0.5, 0]}}
+joints:
+  pin: {type: revolute, journal: bar.A, bearing: ground.O}
+solver: {end_time: 1}
+)Y", 0.5 * std::cos(phi), 0.5 * std::sin(phi), phi);
+    const LinearModes lm = linear_modes(load_model_text(yaml, "bar.yaml").model, true);
+    ASSERT_TRUE(lm.equilibrium) << degrees;
+    const double rate = std::sqrt(0.54 * 9.81 * 0.5 / i_pin);
+    if (degrees <= 90) {
+      ASSERT_EQ(lm.modes.size(), 1u) << degrees;
+      EXPECT_NEAR(lm.modes[0].frequency, rate / (2 * M_PI), 1e-7) << degrees;
+      EXPECT_NEAR(lm.equilibrium->largest_turn, degrees * M_PI / 180, 1e-9) << degrees;
+    } else {
+      EXPECT_TRUE(lm.modes.empty()) << degrees;
+      ASSERT_EQ(lm.real_rates.size(), 2u) << degrees;
+      EXPECT_NEAR(lm.real_rates[1], rate, 1e-6 * rate) << degrees;
+      EXPECT_NEAR(lm.equilibrium->largest_turn, M_PI - degrees * M_PI / 180, 1e-9) << degrees;
+    }
   }
 }
 

@@ -472,7 +472,7 @@ def load(path: str | bytes | os.PathLike, overrides: str | Iterable[str] = ()) -
         error.diagnostics = [(name, 0, 0, "", "not UTF-8 text")]
         raise error
     model = Model(text, filename=filename, overrides=overrides)
-    model.check()
+    model.compiled()  # validated as the loader reads it; assembled when used (or by check())
     return model
 
 
@@ -480,7 +480,7 @@ def loads(text: str, filename: str = "<string>", overrides: str | Iterable[str] 
     """As `load`, from the text of a model file; `filename` is used in messages."""
     _string("text", text, "the text of a model file (str)")
     model = Model(text, filename=filename, overrides=overrides)
-    model.check()
+    model.compiled()
     return model
 
 

@@ -197,7 +197,8 @@ def modes(model, *, equilibrium: bool = False) -> Dict[str, Any]:
 
     Returns a dict: dof, modes (ascending: frequency Hz, damping_ratio, eigenvalue 1/s),
     real_rates (1/s: free, overdamped or unstable directions), equilibrium (None, or
-    newton_steps, residual, largest_change, largest_change_coordinate)."""
+    newton_steps, residual, largest_move (m) with its coordinate, largest_turn (rad) with its
+    coordinate)."""
     return _lash.linear_modes(_model_of(model).compiled(), _flag("equilibrium", equilibrium))
 
 

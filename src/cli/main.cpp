@@ -300,7 +300,8 @@ int main(int argc, char** argv) {
   auto* modes = app.add_subcommand(
       "modes", "Natural frequencies of each flexible link of a model, from its mesh, beside the "
                "Euler–Bernoulli closed forms (clamped–free and free–free), and of the whole "
-               "mechanism linearised at its initial configuration");
+               "mechanism linearised at its initial configuration (or, with --equilibrium, at "
+               "the static equilibrium nearest it)");
   int mode_count = 6;
   modes->add_option("model", model_path, "Model file (YAML)")->required()->check(CLI::ExistingFile);
   modes->add_option("--count", mode_count, "Modes per table (default 6)")

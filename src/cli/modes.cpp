@@ -83,9 +83,10 @@ int print_modes(const Model& model, int count, bool at_equilibrium, std::ostream
            "drivers holding their coordinates): " << e.newton_steps << " Newton step"
         << (e.newton_steps == 1 ? "" : "s") << ", accelerations left " << std::setprecision(3)
         << e.residual;
-    if (e.newton_steps > 0)
-      out << ", largest coordinate change " << e.largest_change << " ("
-          << e.largest_change_coordinate << ")";
+    if (e.newton_steps > 0 && e.largest_move > 0)
+      out << ", largest move " << e.largest_move << " m (" << e.largest_move_coordinate << ")";
+    if (e.newton_steps > 0 && e.largest_turn > 1e-12)  // (a turn of 1e-80 rad said nothing)
+      out << ", largest turn " << e.largest_turn << " rad (" << e.largest_turn_coordinate << ")";
     out << std::setprecision(6) << "\n";
   }
   out << "the mechanism, linearised at its "

@@ -292,7 +292,13 @@ std::vector<Mode> modes(const Mesh& m, Support support) {
   std::vector<Mode> out(n);
   const double l = m.element_length();
   for (int i = 0; i < n; ++i) {
-    out[i].omega = std::sqrt(std::max(eig.eigenvalues()[i], 0.0));
+    // The Rayleigh quotient of each eigenvector: the solver's eigenvalues carry an error of
+    // about ε ω_max², which a fine mesh makes large against the lowest modes (the first bending
+    // mode of a 256-element cantilever 3.4e-6 off); the quotient's error is the square of the
+    // eigenvector's, which a well separated low mode has small.
+    const Eigen::VectorXd x = eig.eigenvectors().col(i);
+    const double rayleigh = x.dot(k * x) / x.dot(mm * x);
+    out[i].omega = std::sqrt(std::max(std::isfinite(rayleigh) ? rayleigh : eig.eigenvalues()[i], 0.0));
     // Amplitude across the axis (ry and l·r'y) against all (slopes scaled by l to metres).
     double across = 0.0, all = 0.0;
     for (int j = 0; j < n; ++j) {

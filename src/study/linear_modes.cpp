@@ -7,6 +7,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "core/beam.hpp"
 #include "core/dynamics.hpp"
 #include "study/run_analysis.hpp"
 
@@ -161,16 +162,40 @@ bool onto_constraints(const Model& m, Workspace& ws, Eigen::VectorXd& y, std::ve
   return false;
 }
 
-// The static equilibrium nearest the assembled state y (at rest): Newton's method on the
+// A static equilibrium near the assembled state y (at rest): Newton's method on the
 // accelerations in the tangent space, r(a) = Nᵀ q̈ = 0, with the tangent stiffness Nᵀ ∂q̈/∂q N
-// (reduced_jacobian's position columns), a step halved until |r| falls, and each trial put back
-// onto the constraints. Where the mechanism is free (a singular tangent stiffness) the step is
-// of least norm. Throws std::runtime_error when no equilibrium is found.
+// (reduced_jacobian's position columns), each step put back onto the constraints. As in Adams'
+// statics, a step is cut so that no angle (or flexible link's slope) changes by more than
+// kTurnLimit and no position by more than kMoveShare of the mechanism's size, and then taken
+// whole: a step judged by whether |r| falls was cut to nothing by a bent link's axial
+// accelerations (second order in the bending, removed by the next step), and a step of any size
+// from near a turning point sent a pendulum round several turns. Where the stiffness is singular
+// along r (nothing holds the direction a load pushes) the step goes with the acceleration to
+// the limits. Throws std::runtime_error when no equilibrium is found.
 Eigen::VectorXd static_equilibrium(const Model& m, Workspace& ws, Eigen::VectorXd y,
                                    Equilibrium& info) {
-  constexpr int kSteps = 50;
+  constexpr int kSteps = 100;
+  constexpr double kTurnLimit = 0.2, kMoveShare = 0.2, kSettled = 1e-10;
   const int nq = ws.nq;
   const Eigen::VectorXd q0 = y.head(nq);
+  // Which coordinates are angles (a rigid body's φ) or slopes (a flexible link's r'), and the
+  // mechanism's size: the box around its bodies' and nodes' positions and the ground's joint
+  // points.
+  std::vector<char> kind(nq, 'x');  // x: a position; a: a rigid body's angle; s: a slope
+  Vec2 lo = Vec2::Constant(INFINITY), hi = Vec2::Constant(-INFINITY);
+  auto extend = [&](const Vec2& p) { lo = lo.cwiseMin(p), hi = hi.cwiseMax(p); };
+  for (int b = 0; b < ws.nb; ++b) {
+    const BodyBlock& bl = ws.blocks[b];
+    const int per = m.bodies[b].flexible() ? beam::kNodeCoordinates : bl.size;
+    for (int i = 0; i < bl.size; ++i)
+      if (i % per >= 2) kind[bl.offset + i] = m.bodies[b].flexible() ? 's' : 'a';
+    for (int i = 0; i + 1 < bl.size; i += per) extend(y.segment<2>(bl.offset + i));
+  }
+  for (const Joint& j : m.joints)
+    for (const PointRef* p : {&j.a, &j.b})
+      if (p->body == kGround) extend(p->s);
+  const double size = (hi - lo).allFinite() && (hi - lo).norm() > 1e-12 ? (hi - lo).norm() : 1e-3;
+
   std::vector<double> f(ws.ny);
   Eigen::MatrixXd null;
   auto residual = [&](Eigen::VectorXd& yy, Eigen::VectorXd& r) {
@@ -179,51 +204,68 @@ Eigen::VectorXd static_equilibrium(const Model& m, Workspace& ws, Eigen::VectorX
     r = null.transpose() * Eigen::Map<const Eigen::VectorXd>(f.data() + nq, nq);
     return true;
   };
+  auto norm = [](const Eigen::VectorXd& v) { return v.size() ? v.cwiseAbs().maxCoeff() : 0.0; };
   Eigen::VectorXd r;
   if (!residual(y, r)) throw std::runtime_error("the initial configuration cannot be evaluated");
-  const double scale = std::max({r.size() ? r.cwiseAbs().maxCoeff() : 0.0, m.gravity.norm(), 1e-300});
-  auto norm = [](const Eigen::VectorXd& v) { return v.size() ? v.cwiseAbs().maxCoeff() : 0.0; };
+  const double scale = std::max({norm(r), m.gravity.norm(), 1e-300});
   // Converged when the accelerations are 1e-10 of their first size (or of g), or when Newton's
-  // step no longer moves the coordinates beyond round-off: a stiff link's accelerations then
-  // stay at their round-off (3e-6 m/s² for a steel string, against 189 at the start).
+  // step, which would remove what is left, moves no position by more than kSettled of the
+  // mechanism's size and no angle or slope by more than kSettled: a stiff link's accelerations
+  // stay at their round-off (3e-6 m/s² for a steel wire, against 189 at the start; 2e-3 for
+  // the compliant mechanism's flexure, against 1.6e5 after the first step).
   int step = 0;
-  bool converged = norm(r) <= 1e-10 * scale;
+  bool converged = norm(r) <= 1e-10 * scale, unheld = false;
   for (; step < kSteps && !converged; ++step) {
     const int dof = static_cast<int>(null.cols());
     const Eigen::MatrixXd K = reduced_jacobian(m, ws, y, null, dof).bottomRows(dof);
-    const Eigen::VectorXd da = K.completeOrthogonalDecomposition().solve(-r);
-    const Eigen::VectorXd move = null * da;
-    if (move.cwiseAbs().maxCoeff() <= 1e-14 * (1.0 + y.head(nq).cwiseAbs().maxCoeff())) {
-      // A step too small to take, which would have removed what is left (round-off), or none
-      // because nothing stiffens the direction the load pushes (a block falling on its guide).
-      converged = norm(K * da + r) <= 0.5 * norm(r);
+    Eigen::VectorXd da = K.completeOrthogonalDecomposition().solve(-r);
+    unheld = norm(K * da + r) > 0.5 * norm(r);
+    Eigen::VectorXd move = null * da;
+    bool negligible = !unheld;
+    for (int i = 0; i < nq && negligible; ++i)
+      negligible = std::abs(move[i]) <= kSettled * (kind[i] == 'x' ? size : 1.0);
+    if (negligible) {  // taken, and the last
+      Eigen::VectorXd trial = y, rt;
+      trial.head(nq) += move;
+      if (residual(trial, rt) && norm(rt) <= norm(r)) y = std::move(trial), r = std::move(rt), ++step;
+      converged = true;
       break;
     }
-    bool accepted = false;
-    for (double share = 1.0; share >= 1.0 / 1024 && !accepted; share /= 2) {
+    if (unheld) move = null * r;  // with the acceleration, to the limits below
+    double cut = unheld ? INFINITY : 1.0;
+    for (int i = 0; i < nq; ++i)
+      if (move[i] != 0.0)
+        cut = std::min(cut, (kind[i] == 'x' ? kMoveShare * size : kTurnLimit) / std::abs(move[i]));
+    if (!std::isfinite(cut)) break;
+    bool taken = false;
+    for (int tries = 0; tries < 20 && !taken; ++tries, cut /= 2) {
       Eigen::VectorXd trial = y, rt;
-      trial.head(nq) += share * move;
-      if (residual(trial, rt) && norm(rt) < norm(r)) y = std::move(trial), r = std::move(rt), accepted = true;
+      trial.head(nq) += cut * move;
+      if (residual(trial, rt)) y = std::move(trial), r = std::move(rt), taken = true;
     }
-    if (!accepted) break;
+    if (!taken) break;
     converged = norm(r) <= 1e-10 * scale;
   }
   if (!converged) {
     std::ostringstream s;
     s.precision(3);
     s << "no static equilibrium found near the initial configuration: after " << step
-      << " Newton steps the accelerations at rest are still " << norm(r)
-      << " (m/s² or rad/s²); a direction with a load and nothing to balance it (a slider pushed "
-         "along its guide) has none";
+      << " Newton steps the accelerations at rest are still " << norm(r) << " (m/s² or rad/s²)";
+    if (unheld)
+      s << "; nothing holds the direction the loads push (a slider pushed along its guide)";
     throw std::runtime_error(s.str());
   }
   residual(y, r);  // ws at the equilibrium
   info.newton_steps = step;
   info.residual = norm(r);
   const std::vector<std::string> names = state_names(m, ws);
-  for (int i = 0; i < nq; ++i)
-    if (const double d = std::abs(y[i] - q0[i]); d > info.largest_change)
-      info.largest_change = d, info.largest_change_coordinate = names[i];
+  for (int i = 0; i < nq; ++i) {
+    const double d = std::abs(y[i] - q0[i]);
+    if (kind[i] == 'x' && d > info.largest_move)
+      info.largest_move = d, info.largest_move_coordinate = names[i];
+    if (kind[i] == 'a' && d > info.largest_turn)
+      info.largest_turn = d, info.largest_turn_coordinate = names[i];
+  }
   return y;
 }
 

@@ -23,9 +23,11 @@ struct LinearMode {
 /// Where `linear_modes(model, true)` found the static equilibrium.
 struct Equilibrium {
   int newton_steps = 0;
-  double residual = 0.0;        ///< largest acceleration left in the tangent space, m/s² or rad/s²
-  double largest_change = 0.0;  ///< largest coordinate change from the assembled state, m or rad
-  std::string largest_change_coordinate;  ///< its name (state_names)
+  double residual = 0.0;      ///< largest acceleration left in the tangent space, m/s² or rad/s²
+  double largest_move = 0.0;  ///< largest position change from the assembled state, m
+  std::string largest_move_coordinate;  ///< its name (state_names): a body's or node's x or y
+  double largest_turn = 0.0;  ///< largest change of a rigid body's angle, rad
+  std::string largest_turn_coordinate;  ///< its name (state_names)
 };
 
 struct LinearModes {
