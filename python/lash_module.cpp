@@ -784,9 +784,9 @@ PYBIND11_MODULE(_lash, m) {
         "RuntimeError when no consistent initial state exists.");
   m.def("linear_modes",
         [](const CompiledModel& cm, bool at_equilibrium) {
-          std::atomic<int> interrupt{0};  // (not polled: the linearisation takes seconds at most)
+          std::atomic<int> interrupt{0};  // Ctrl-C: KeyboardInterrupt within one column or step
           std::function<lash::LinearModes()> work = [&] {
-            return lash::linear_modes(cm.loaded.model, at_equilibrium);
+            return lash::linear_modes(cm.loaded.model, at_equilibrium, &interrupt);
           };
           const lash::LinearModes lm = run_located(cm, work, interrupt);
           py::dict d;

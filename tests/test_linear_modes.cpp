@@ -384,5 +384,69 @@ solver: {end_time: 1}
   }
 }
 
+
+TEST(LinearModes, AtTheStaticEquilibriumFarOrFromAPointTheNewtonStepsGrow) {
+  // The mechanism's box was its bodies and ground joint points only: a block whose guide point
+  // is its own start, hung on a spring from elsewhere, had a box of 0 (taken as 1 mm) and steps
+  // of 0.2 mm: no equilibrium in 100 steps. The limit now doubles while cut steps help, and
+  // load anchors count: the same m g/k = 24.5 mm drop; a soft spring's 9.81 m (33 sizes); a
+  // point mass in a V of two springs from (±1, 1), its drop d solving 2k(L − √2)(1 + d)/L = m g
+  // with L = √(1 + (1 + d)²).
+  const std::string block = R"Y(
+gravity: [0, -9.81]
+ground: {markers: {T: [0, 0], G: [0, -0.3]}}
+bodies: {block: {mass: 2.0, inertia: 0.01, position: [0, -0.3]}}
+joints: {guide: {type: translational, guide: ground.G, slider: block, axis: [0, 1]}}
+loads: {spring: {type: spring_damper, from: ground.T, to: block, stiffness: 800, free_length: 0.3}}
+solver: {end_time: 1}
+)Y";
+  for (const double k : {800.0, 2.0}) {
+    const LinearModes lm = linear_modes(
+        load_model_text(block, "block.yaml", {"loads.spring.stiffness=" + std::to_string(k)}).model, true);
+    ASSERT_TRUE(lm.equilibrium) << k;
+    EXPECT_NEAR(lm.equilibrium->largest_move, 2.0 * 9.81 / k, 1e-9 * 2.0 * 9.81 / k) << k;
+    ASSERT_EQ(lm.modes.size(), 1u) << k;
+    EXPECT_NEAR(lm.modes[0].frequency, std::sqrt(k / 2.0) / (2 * M_PI), 1e-8) << k;
+  }
+  const LinearModes vee = linear_modes(load_model_text(R"Y(
+gravity: [0, -9.81]
+ground: {markers: {L: [-1, 1], R: [1, 1]}}
+bodies: {m: {mass: 1.0, position: [0, 0]}}
+loads:
+  s1: {type: spring_damper, from: ground.L, to: m, stiffness: 100}
+  s2: {type: spring_damper, from: ground.R, to: m, stiffness: 100}
+solver: {end_time: 1}
+)Y", "vee.yaml").model, true);
+  ASSERT_TRUE(vee.equilibrium);
+  double lo = 0.0, hi = 1.0;  // the drop d, by bisection
+  for (int i = 0; i < 200; ++i) {
+    const double d = 0.5 * (lo + hi), l = std::sqrt(1 + (1 + d) * (1 + d));
+    (2 * 100 * (l - std::sqrt(2.0)) * (1 + d) / l > 9.81 ? hi : lo) = d;
+  }
+  EXPECT_NEAR(vee.equilibrium->largest_move, lo, 1e-9);
+  EXPECT_EQ(vee.equilibrium->largest_move_coordinate, "m.y");
+}
+
+TEST(LinearModes, AStiffnessThatIsNotThereIsNoEquilibrium) {
+  // A spring of free length 0.1 m between coincident points pulls along x (no line): the
+  // differences saw a stiffness of 1e11 there, the Newton step was negligible and the state,
+  // 7.14 m/s² out of balance, was reported as the equilibrium.
+  try {
+    linear_modes(load_model_text(R"Y(
+gravity: [0, -9.81]
+ground: {markers: {O: [0, 0], F: [5, 5]}}
+bodies:
+  m: {mass: 1.0, position: [0, 0]}
+  dummy: {mass: 1, inertia: 1, position: [5, 5]}
+joints: {pin: {type: fixed, base: ground.F, attached: dummy}}
+loads: {s: {type: spring_damper, from: ground.O, to: m, stiffness: 100, free_length: 0.1}}
+solver: {end_time: 1}
+)Y", "zero_length.yaml").model, true);
+    ADD_FAILURE() << "an unbalanced state was taken as the equilibrium";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("no static equilibrium found"), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace lash::test

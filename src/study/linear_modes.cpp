@@ -121,11 +121,13 @@ Eigen::MatrixXd tangent_basis(const Workspace& ws) {
 // extrapolated to h → 0 (ridders_column). A fixed step cannot suit every mechanism: 1e-6 moved
 // a 1e-4 m pendulum 1 % of its length, and its 49.8488 Hz came out 49.8464.
 Eigen::MatrixXd reduced_jacobian(const Model& m, Workspace& ws, const Eigen::VectorXd& y,
-                                 const Eigen::MatrixXd& null, int columns) {
+                                 const Eigen::MatrixXd& null, int columns,
+                                 const std::atomic<int>* interrupt) {
   const int nq = ws.nq, dof = static_cast<int>(null.cols()), n2 = 2 * dof;
   std::vector<double> f(ws.ny), fm(ws.ny);
   Eigen::MatrixXd A(n2, columns);
   for (int c = 0; c < columns; ++c) {
+    if (interrupt && interrupt->load() != 0) throw std::runtime_error("interrupted");
     Eigen::VectorXd b = Eigen::VectorXd::Zero(ws.ny);
     if (c < dof)
       b.head(nq) = null.col(c);
@@ -173,7 +175,7 @@ bool onto_constraints(const Model& m, Workspace& ws, Eigen::VectorXd& y, std::ve
 // along r (nothing holds the direction a load pushes) the step goes with the acceleration to
 // the limits. Throws std::runtime_error when no equilibrium is found.
 Eigen::VectorXd static_equilibrium(const Model& m, Workspace& ws, Eigen::VectorXd y,
-                                   Equilibrium& info) {
+                                   Equilibrium& info, const std::atomic<int>* interrupt) {
   constexpr int kSteps = 100;
   constexpr double kTurnLimit = 0.2, kMoveShare = 0.2, kSettled = 1e-10;
   const int nq = ws.nq;
@@ -194,7 +196,15 @@ Eigen::VectorXd static_equilibrium(const Model& m, Workspace& ws, Eigen::VectorX
   for (const Joint& j : m.joints)
     for (const PointRef* p : {&j.a, &j.b})
       if (p->body == kGround) extend(p->s);
+  for (const Load& l : m.loads)
+    for (const PointRef* p : {&l.a, &l.b})
+      if (p->body == kGround) extend(p->s);
   const double size = (hi - lo).allFinite() && (hi - lo).norm() > 1e-12 ? (hi - lo).norm() : 1e-3;
+  // The positions' limit doubles whenever it cut a step that then lowered |r|: an equilibrium
+  // 33 sizes away (a soft spring's stretch) or a mechanism whose box is a point (its size taken
+  // as 1 mm) is reached in a few more steps instead of never.
+  double move_limit = kMoveShare * size;
+  double largest_r = 0.0;  // the largest |r| met: what round-off in r is measured against
 
   std::vector<double> f(ws.ny);
   Eigen::MatrixXd null;
@@ -216,8 +226,10 @@ Eigen::VectorXd static_equilibrium(const Model& m, Workspace& ws, Eigen::VectorX
   int step = 0;
   bool converged = norm(r) <= 1e-10 * scale, unheld = false;
   for (; step < kSteps && !converged; ++step) {
+    if (interrupt && interrupt->load() != 0) throw std::runtime_error("interrupted");
+    largest_r = std::max(largest_r, norm(r));
     const int dof = static_cast<int>(null.cols());
-    const Eigen::MatrixXd K = reduced_jacobian(m, ws, y, null, dof).bottomRows(dof);
+    const Eigen::MatrixXd K = reduced_jacobian(m, ws, y, null, dof, interrupt).bottomRows(dof);
     Eigen::VectorXd da = K.completeOrthogonalDecomposition().solve(-r);
     unheld = norm(K * da + r) > 0.5 * norm(r);
     Eigen::VectorXd move = null * da;
@@ -228,29 +240,37 @@ Eigen::VectorXd static_equilibrium(const Model& m, Workspace& ws, Eigen::VectorX
       Eigen::VectorXd trial = y, rt;
       trial.head(nq) += move;
       if (residual(trial, rt) && norm(rt) <= norm(r)) y = std::move(trial), r = std::move(rt), ++step;
-      converged = true;
+      // What is left must be round-off of the largest accelerations met, not a load that a
+      // spurious stiffness (a spring between coincident points) claims to hold.
+      converged = norm(r) <= 1e-6 * largest_r;
       break;
     }
     if (unheld) move = null * r;  // with the acceleration, to the limits below
     double cut = unheld ? INFINITY : 1.0;
+    bool moves_cut = false;
     for (int i = 0; i < nq; ++i)
-      if (move[i] != 0.0)
-        cut = std::min(cut, (kind[i] == 'x' ? kMoveShare * size : kTurnLimit) / std::abs(move[i]));
+      if (move[i] != 0.0) {
+        const double c = (kind[i] == 'x' ? move_limit : kTurnLimit) / std::abs(move[i]);
+        if (c < cut) cut = c, moves_cut = kind[i] == 'x';
+      }
     if (!std::isfinite(cut)) break;
     bool taken = false;
+    const double before = norm(r);
     for (int tries = 0; tries < 20 && !taken; ++tries, cut /= 2) {
       Eigen::VectorXd trial = y, rt;
       trial.head(nq) += cut * move;
       if (residual(trial, rt)) y = std::move(trial), r = std::move(rt), taken = true;
     }
     if (!taken) break;
+    if (moves_cut && norm(r) < before) move_limit *= 2;
     converged = norm(r) <= 1e-10 * scale;
   }
   if (!converged) {
     std::ostringstream s;
     s.precision(3);
     s << "no static equilibrium found near the initial configuration: after " << step
-      << " Newton steps the accelerations at rest are still " << norm(r) << " (m/s² or rad/s²)";
+      << (step == 1 ? " Newton step" : " Newton steps") << " the accelerations at rest are still "
+      << norm(r) << " (m/s² or rad/s²)";
     if (unheld)
       s << "; nothing holds the direction the loads push (a slider pushed along its guide)";
     throw std::runtime_error(s.str());
@@ -259,7 +279,7 @@ Eigen::VectorXd static_equilibrium(const Model& m, Workspace& ws, Eigen::VectorX
   info.newton_steps = step;
   info.residual = norm(r);
   const std::vector<std::string> names = state_names(m, ws);
-  for (int i = 0; i < nq; ++i) {
+  for (int i = 0; i < nq && step > 0; ++i) {
     const double d = std::abs(y[i] - q0[i]);
     if (kind[i] == 'x' && d > info.largest_move)
       info.largest_move = d, info.largest_move_coordinate = names[i];
@@ -271,7 +291,8 @@ Eigen::VectorXd static_equilibrium(const Model& m, Workspace& ws, Eigen::VectorX
 
 }  // namespace
 
-LinearModes linear_modes(const Model& model, bool at_equilibrium) {
+LinearModes linear_modes(const Model& model, bool at_equilibrium,
+                        const std::atomic<int>* interrupt) {
   Model m = ideal_model(model);
   {
     // Every driven coordinate held where it starts: at initial + f(0) (a position profile's
@@ -301,7 +322,7 @@ LinearModes linear_modes(const Model& model, bool at_equilibrium) {
   const int nq = ws.nq;
   y.segment(nq, nq).setZero();
   LinearModes out;
-  if (at_equilibrium) y = static_equilibrium(m, ws, y, out.equilibrium.emplace());
+  if (at_equilibrium) y = static_equilibrium(m, ws, y, out.equilibrium.emplace(), interrupt);
   std::vector<double> f(ws.ny);
   if (!evaluate(m, ws, 0.0, y.data(), f.data()))
     throw std::runtime_error("the initial configuration cannot be evaluated");
@@ -309,7 +330,7 @@ LinearModes linear_modes(const Model& model, bool at_equilibrium) {
   out.dof = static_cast<int>(null.cols());
   if (out.dof == 0) return out;
   const int n2 = 2 * out.dof;
-  Eigen::MatrixXd A = reduced_jacobian(m, ws, y, null, n2);
+  Eigen::MatrixXd A = reduced_jacobian(m, ws, y, null, n2, interrupt);
   balance(A);
   const Eigen::EigenSolver<Eigen::MatrixXd> es(A, false);
   if (es.info() != Eigen::Success) throw std::runtime_error("the eigenvalue solver failed");

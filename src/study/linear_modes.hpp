@@ -5,6 +5,7 @@
 /// stabilisation): the eigenvalues of the right-hand side's
 /// Jacobian restricted to the tangent space of the constraints (docs/analysis.md, "Linearised
 /// mechanism").
+#include <atomic>
 #include <complex>
 #include <optional>
 #include <string>
@@ -53,6 +54,9 @@ inline constexpr double kCriticalShare = 1e-3;
 /// initial configuration (drivers held, gravity and loads acting, at rest), found by Newton's
 /// method on the accelerations in the tangent space; it throws std::runtime_error when there is
 /// none (a load along a free direction).
-LinearModes linear_modes(const Model& model, bool at_equilibrium = false);
+/// `interrupt` (optional) is polled between the linearisation's columns and Newton's steps: when
+/// it is set the computation stops with std::runtime_error("interrupted").
+LinearModes linear_modes(const Model& model, bool at_equilibrium = false,
+                         const std::atomic<int>* interrupt = nullptr);
 
 }  // namespace lash
