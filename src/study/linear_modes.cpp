@@ -168,8 +168,8 @@ bool onto_constraints(const Model& m, Workspace& ws, Eigen::VectorXd& y, std::ve
 // accelerations in the tangent space, r(a) = Nᵀ q̈ = 0, with the tangent stiffness Nᵀ ∂q̈/∂q N
 // (reduced_jacobian's position columns), each step put back onto the constraints. As in Adams'
 // statics, a step is cut so that no angle (or flexible link's slope) changes by more than
-// kTurnLimit and no position by more than kMoveShare of the mechanism's size, and then taken
-// whole: a step judged by whether |r| falls was cut to nothing by a bent link's axial
+// kTurnLimit and no position by more than a limit (from kMoveShare of the mechanism's size,
+// doubled while it cuts steps that help), and then taken whole: a step judged by whether |r| falls was cut to nothing by a bent link's axial
 // accelerations (second order in the bending, removed by the next step), and a step of any size
 // from near a turning point sent a pendulum round several turns. Where the stiffness is singular
 // along r (nothing holds the direction a load pushes) the step goes with the acceleration to
@@ -181,8 +181,8 @@ Eigen::VectorXd static_equilibrium(const Model& m, Workspace& ws, Eigen::VectorX
   const int nq = ws.nq;
   const Eigen::VectorXd q0 = y.head(nq);
   // Which coordinates are angles (a rigid body's φ) or slopes (a flexible link's r'), and the
-  // mechanism's size: the box around its bodies' and nodes' positions and the ground's joint
-  // points.
+  // mechanism's size: the box around its bodies' and nodes' positions and the ground points of
+  // its joints and loads.
   std::vector<char> kind(nq, 'x');  // x: a position; a: a rigid body's angle; s: a slope
   Vec2 lo = Vec2::Constant(INFINITY), hi = Vec2::Constant(-INFINITY);
   auto extend = [&](const Vec2& p) { lo = lo.cwiseMin(p), hi = hi.cwiseMax(p); };
