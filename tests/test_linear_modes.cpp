@@ -9,6 +9,25 @@
 namespace lash::test {
 namespace {
 
+// A 1 m steel strip 20 mm wide and `height` thick in the plane, clamped at its end A to the
+// ground, in 8 elements: Kelvin–Voigt damping `damping` (s), under gravity or not.
+Model clamped_strip(double height, double damping, bool gravity) {
+  char yaml[600];
+  std::snprintf(yaml, sizeof yaml, R"Y(
+gravity: [0, %g]
+ground: {markers: {A: [0, 0]}}
+bodies:
+  strip:
+    position: [0.5, 0]
+    markers: {A: [-0.5, 0], B: [0.5, 0]}
+    flexible: {length: 1.0, elements: 8, section: {rectangle: [0.02, %.17g]}, youngs_modulus: 207e9, density: 7800, damping: %.17g}
+joints:
+  clamp: {type: fixed, base: ground.A, attached: strip.A}
+solver: {end_time: 1.0}
+)Y", gravity ? -9.81 : 0.0, height, damping);
+  return load_model_text(yaml, "strip.yaml").model;
+}
+
 TEST(LinearModes, APendulumHangingFromItsPinSwingsAtItsClosedForm) {
   // A 1 m bar of 0.54 kg (I = 0.045 kg·m² about its centre) hanging from a pin at one end:
   // ω² = m g (L/2) / (I + m (L/2)²); one degree of freedom, one undamped mode.
@@ -54,17 +73,7 @@ TEST(LinearModes, OverdampedRootsOfADampedLinkAreRealNotModes) {
   // roots solve s² + ηω_i²s + ω_i² = 0, so ζ_i = ηω_i/2, and every overdamped mode has a slow
   // root near −1/η. Those clustered roots came out as seven "modes" at 1/(2πη) = 15.9 Hz with
   // ζ = 1, listed before the first bending mode (16.64 Hz, ζ = 0.523).
-  const Model m = load_model_text(R"Y(
-ground: {markers: {A: [0, 0]}}
-bodies:
-  beam:
-    position: [0.5, 0]
-    markers: {A: [-0.5, 0], B: [0.5, 0]}
-    flexible: {length: 1.0, elements: 8, section: {rectangle: [0.02, 0.02]}, youngs_modulus: 207e9, density: 7800, damping: 0.01}
-joints:
-  clamp: {type: fixed, base: ground.A, attached: beam.A}
-solver: {end_time: 1.0}
-)Y", "cantilever.yaml").model;
+  const Model m = clamped_strip(0.02, 0.01, false);
   const LinearModes lm = linear_modes(m);
   ASSERT_FALSE(lm.modes.empty());
   // Euler–Bernoulli: ω₁ = 1.8751²·√(EI/(ρA L⁴)), EI = 207e9·0.02⁴/12, ρA = 7800·4e-4.
@@ -175,17 +184,7 @@ TEST(LinearModes, ASlenderCantileversModesAreItsMeshsOwnToFiveDigits) {
   // step carried its error into the first mode: 0.416277 Hz
   // against the mesh's 0.416092 (beam::modes, a symmetric generalised eigenproblem, computed
   // independently), with a step of 1e-6. Every mode below 1 kHz agrees to 1e-5.
-  const Model m = load_model_text(R"Y(
-ground: {markers: {A: [0, 0]}}
-bodies:
-  strip:
-    position: [0.5, 0]
-    markers: {A: [-0.5, 0], B: [0.5, 0]}
-    flexible: {length: 1.0, elements: 8, section: {rectangle: [0.02, 0.0005]}, youngs_modulus: 207e9, density: 7800}
-joints:
-  clamp: {type: fixed, base: ground.A, attached: strip.A}
-solver: {end_time: 1.0}
-)Y", "strip.yaml").model;
+  const Model m = clamped_strip(0.0005, 0.0, false);
   const LinearModes lm = linear_modes(m);
   const std::vector<beam::Mode> own = beam::modes(m.bodies[0].mesh, beam::Support::clamped);
   ASSERT_EQ(lm.modes.size(), own.size());
@@ -334,15 +333,7 @@ TEST(LinearModes, AtTheStaticEquilibriumACantileverSagsAsBeamTheorySays) {
   // sags w L⁴ / (8 EI) = 22.2 mm. Judged by whether the accelerations fell, Newton's steps were
   // halved to nothing (each bending step strains the link axially, to second order, which the
   // next step removes), and no equilibrium was found.
-  const Model m = load_model_text(R"Y(
-gravity: [0, -9.81]
-ground: {markers: {A: [0, 0]}}
-bodies:
-  strip: {position: [0.5, 0], markers: {A: [-0.5, 0], B: [0.5, 0]},
-          flexible: {length: 1.0, elements: 8, section: {rectangle: [0.02, 0.005]}, youngs_modulus: 207e9, density: 7800}}
-joints: {clamp: {type: fixed, base: ground.A, attached: strip.A}}
-solver: {end_time: 1.0}
-)Y", "strip.yaml").model;
+  const Model m = clamped_strip(0.005, 0.0, true);
   const LinearModes lm = linear_modes(m, true);
   ASSERT_TRUE(lm.equilibrium);
   const double w = 7800 * 0.02 * 0.005 * 9.81, ei = 207e9 * 0.02 * std::pow(0.005, 3) / 12;

@@ -275,7 +275,6 @@ Eigen::VectorXd static_equilibrium(const Model& m, Workspace& ws, Eigen::VectorX
       s << "; nothing holds the direction the loads push (a slider pushed along its guide)";
     throw std::runtime_error(s.str());
   }
-  residual(y, r);  // ws at the equilibrium
   info.newton_steps = step;
   info.residual = norm(r);
   const std::vector<std::string> names = state_names(m, ws);
@@ -296,21 +295,20 @@ LinearModes linear_modes(const Model& model, bool at_equilibrium,
   Model m = ideal_model(model);
   {
     // Every driven coordinate held where it starts: at initial + f(0) (a position profile's
-    // f(0) = 0.5 was dropped, and a spring was linearised at the wrong length).
+    // f(0) = 0.5 was dropped, and a spring was linearised at the wrong length); a constant
+    // speed's ω·0 and a speed profile's integral start at 0.
     const Workspace at_start(m);
     for (size_t d = 0; d < m.drivers.size(); ++d) {
-      double f = 0.0, fd = 0.0, fdd = 0.0;
-      if (m.drivers[d].profile == DriverProfile::position)
+      Driver& drv = m.drivers[d];
+      if (drv.profile == DriverProfile::position) {
+        double f = 0.0, fd = 0.0, fdd = 0.0;  // (f apart: driver_motion reads drv.initial)
         driver_motion(m, at_start, static_cast<int>(d), 0.0, nullptr, f, fd, fdd);
-      else
-        f = m.drivers[d].initial;  // constant speed: ω·0; speed: its integral starts at 0
-      m.drivers[d].initial = f;
+        drv.initial = f;
+      }
+      drv.profile = DriverProfile::constant_speed;
+      drv.speed = 0.0;
+      drv.expression.clear();
     }
-  }
-  for (Driver& d : m.drivers) {
-    d.profile = DriverProfile::constant_speed;
-    d.speed = 0.0;
-    d.expression.clear();
   }
   // No constraint stabilisation: Baumgarte's terms are not the mechanism's, and the difference
   // steps leave the constraints by O(h²), which they answered with a spring of β² in every
