@@ -674,15 +674,24 @@ void smallest_multipliers(Workspace& ws) {
   // Near a singular position, through an orthonormal basis (modified Gram–Schmidt, twice): the
   // two kinds of columns can be nearly parallel there, and (NᵀN)⁻¹ then amplifies round-off
   // (a double parallelogram in line reported 3.3e4 N). A column within 1e-8 of the span of
-  // those before it adds nothing.
+  // those before it adds nothing. Nor does a weak row's column whose remainder is no longer
+  // nearly self-equilibrated: weak rows can outnumber the nearly dependent sets (three rows of
+  // a double parallelogram in line for the two sets of crank tensions that sum to zero), and
+  // what is left of the last, about the pivot's size, is then the other columns' O(pivot)
+  // error, scaled up: removing λ along it took 21.5 N off the coupler's resultant. Its Φ_qᵀ
+  // image per unit length, against the column's own before, tells (kWeakImageGrowth).
+  constexpr double kWeakImageGrowth = 10.0;
   int kept = 0;
   for (int j = 0; j < nd + nw; ++j) {
     auto col = s.null_basis.col(j);
     const double before = col.norm();
+    const double image_before = j < nd ? 0.0 : (ws.phi_q.transpose() * col).norm() / before;
     for (int pass = 0; pass < 2; ++pass)
       for (int i = 0; i < kept; ++i) col -= s.null_basis.col(i).dot(col) * s.null_basis.col(i);
     const double after = col.norm();
     if (!(after > 1e-8 * before)) continue;
+    if (j >= nd && !((ws.phi_q.transpose() * col).norm() / after <= kWeakImageGrowth * image_before))
+      continue;
     s.null_basis.col(kept++) = col / after;
   }
   for (int i = 0; i < kept; ++i) ws.lambda -= s.null_basis.col(i).dot(ws.lambda) * s.null_basis.col(i);
