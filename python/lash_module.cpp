@@ -63,12 +63,11 @@ py::array_t<double> to_numpy(std::vector<double>&& v) {
   return to_numpy(std::move(v), {n});
 }
 
-/// The identifier of Python's main thread (threading.main_thread().ident); the GIL is held.
-unsigned long main_thread_ident() {
-  static const unsigned long ident =
-      py::module_::import("threading").attr("main_thread")().attr("ident").cast<unsigned long>();
-  return ident;
-}
+/// The identifier of Python's main thread (threading.main_thread().ident), set when the module
+/// is imported. A function-local static initialised by calling Python deadlocked two threads
+/// whose first run started together: one waited in the static's guard holding the GIL, the
+/// other held the guard and waited for the GIL.
+unsigned long g_main_thread_ident = 0;
 
 /// Runs `work` on a worker thread with the GIL released; called from Python's main thread, the
 /// calling thread checks for signals every 50 ms. On one (Ctrl-C: Python's handler raises
@@ -83,7 +82,7 @@ R run_interruptible(const std::function<R()>& work, std::atomic<int>& interrupt)
   bool done = false, signalled = false;
   std::mutex m;
   std::condition_variable cv;
-  const bool main_thread = PyThread_get_thread_ident() == main_thread_ident();
+  const bool main_thread = PyThread_get_thread_ident() == g_main_thread_ident;
   {
     py::gil_scoped_release release;
     std::thread worker([&] {
@@ -631,6 +630,8 @@ void check_non_decreasing(const std::string& function, const std::string& name,
 }  // namespace
 
 PYBIND11_MODULE(_lash, m) {
+  g_main_thread_ident =
+      py::module_::import("threading").attr("main_thread")().attr("ident").cast<unsigned long>();
   m.doc() = "Lash's C++ engine (use the package lash, which wraps this module).";
 
   // lash::ModelError → lash.ModelError(ValueError), with every problem as `diagnostics`.

@@ -911,3 +911,29 @@ def test_modes_as_lash_modes_computes_them():
         lash.analysis.modes(hanging.copy().set("loads.spring.stiffness", 0), equilibrium=True)
     with pytest.raises(TypeError, match="equilibrium"):
         lash.analysis.modes(hanging, equilibrium="yes")
+
+
+def test_threads_starting_their_first_sweeps_together_finish(tmp_path):
+    """Threads whose first lash.sweep calls start together: the module's record of Python's
+    main thread was a function-local static initialised by calling Python, and one thread
+    waited in its guard holding the GIL while the other held the guard waiting for the GIL
+    (5 of 8 fresh interpreters hung). Each try is a fresh interpreter, where nothing has run."""
+    study = tmp_path / "study.yaml"
+    study.write_text(f"study: t\nmodel: {FLORES}\nset: {{solver.end_time: 1.0e-4}}\n"
+                     "parameters:\n  joints.rod_slider.clearance: {values: [2.0e-4]}\n")
+    script = (
+        "import sys, threading, lash\n"
+        "sys.setswitchinterval(1e-6)  # the GIL changes hands often\n"
+        "start = threading.Barrier(4)  # and the four calls start together: 5 of 8 hung\n"
+        "def go(out):\n"
+        "    start.wait()\n"
+        "    lash.sweep(sys.argv[1], out, jobs=1)\n"
+        "ts = [threading.Thread(target=go, args=(sys.argv[2] + str(i),)) for i in range(4)]\n"
+        "[t.start() for t in ts]; [t.join() for t in ts]; print('done')\n")
+    for attempt in range(5):
+        out = tmp_path / f"o{attempt}_"
+        p = subprocess.run([sys.executable, "-c", script, str(study), str(out)],
+                           capture_output=True, text=True, timeout=30)
+        assert p.returncode == 0 and p.stdout.strip() == "done", p.stderr
+        for i in range(4):
+            assert len(lash.read_study(f"{out}{i}")) == 1
