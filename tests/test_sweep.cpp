@@ -17,6 +17,7 @@
 
 #include "analysis/bifurcation.hpp"
 #include "io/diagnostics.hpp"
+#include "io/number_format.hpp"
 #include "study/study_db.hpp"
 #include "study/sweep.hpp"
 #include "test_support.hpp"
@@ -253,8 +254,10 @@ TEST(StudyFile, ProblemsAreLocatedInTheStudyFile) {
                      "  joints.rod_slider.clearance: {values: [1.0e-4]}\n")
                 .find("zip needs the same number of levels"),
             std::string::npos);
-  EXPECT_NE(problems("parameters:\n  drivers.crank.speed_rpm: {min: 1, max: 2}\n").find("add sampling"),
-            std::string::npos);
+  // At the drawn parameter (it was the file's start, 1:1).
+  const std::string drawn = problems("parameters:\n  drivers.crank.speed_rpm: {min: 1, max: 2}\n");
+  EXPECT_NE(drawn.find("s.yaml:4:3: parameters with min/max are drawn: add sampling"),
+            std::string::npos) << drawn;
   // zip with a sampled parameter: said once, with no count of the drawn parameter's "0 levels".
   const std::string zip = problems("combine: zip\nsampling: {method: random, count: 4}\nparameters:\n"
                                    "  drivers.crank.speed_rpm: {min: 1000, max: 2000}\n"
@@ -387,6 +390,10 @@ TEST(StudyRun, AContinuationDoesNotGoOnFromAFailedRun) {
   ASSERT_EQ(runs.size(), 2u);
   const RunRecord first = run_study_point(spec, runs[0]);
   ASSERT_EQ(first.status, "failed") << first.message;
+  // Where it stopped, as `lash run` says it (runs.csv has no t_reached column).
+  EXPECT_EQ(first.message.rfind("stopped at t = " + lash::shortest_number(first.t_reached) + " s: ", 0), 0u)
+      << first.message;
+  EXPECT_GT(first.t_reached, 0.0);
   EXPECT_EQ(first.final_state.y.size(), 0);
   const RunRecord second = run_study_point(spec, runs[1], nullptr, &first);
   EXPECT_EQ(second.status, "error");

@@ -463,8 +463,17 @@ StudySpec load_study_text(const std::string& text, const std::string& file,
     if (s["seed"] && r.integer(s["seed"], "sampling: seed", 0, std::numeric_limits<long>::max(), seed))
       spec.seed = static_cast<unsigned long long>(seed);
   }
-  if (any_sampled && spec.sampling.empty())
-    r.error(root, "parameters with min/max are drawn: add sampling: {method: latin_hypercube, count: N}");
+  if (any_sampled && spec.sampling.empty()) {
+    // At the first parameter with min/max (the file's start said nothing). A function: a
+    // YAML::Node assigned to another one writes into it.
+    const auto drawn = [&]() -> YAML::Node {
+      if (params && params.IsMap())
+        for (const auto& kv : params)
+          if (kv.second.IsMap() && (kv.second["min"] || kv.second["max"])) return kv.first;
+      return root;
+    };
+    r.error(drawn(), "parameters with min/max are drawn: add sampling: {method: latin_hypercube, count: N}");
+  }
   if (!any_sampled && !spec.sampling.empty())
     r.error(root["sampling"], "sampling: no parameter has min/max to draw");
   if (any_sampled && spec.combine == "zip")
@@ -1009,7 +1018,9 @@ RunRecord run_study_point(const StudySpec& spec, const StudyRun& run, const std:
       rec.driver_speed = drv ? drv->speed : 0.0;
     }
     rec.status = res.status.ok ? "completed" : "failed";
-    rec.message = res.status.ok ? "" : res.status.message;
+    // As `lash run` says it: where the run stopped (t_reached, which runs.csv leaves out).
+    rec.message = res.status.ok ? "" : "stopped at t = " + number_text(res.status.t) + " s: " +
+                                           res.status.message;
     if (!keep.missing.empty()) {
       std::string list;
       for (const auto& c : keep.missing) list += (list.empty() ? "" : ", ") + c;
