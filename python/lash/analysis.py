@@ -33,6 +33,10 @@ def _vector(name: str, x) -> np.ndarray:
     if a.ndim != 1:
         raise ValueError(f"{name}: expected a 1-D sequence of numbers, got an array of shape "
                          f"{a.shape}")
+    bad = np.flatnonzero(~np.isfinite(a))
+    if bad.size:  # a NaN made every bin of a spectrum NaN, unsaid
+        raise ValueError(f"{name}: expected finite numbers, got {a[bad[0]]} at index {bad[0]}"
+                         + (f" (and {bad.size - 1} more)" if bad.size > 1 else ""))
     return a
 
 
@@ -231,7 +235,7 @@ def amplitude_spectrum(x, dt: float, window: str = "hann") -> Dict[str, Any]:
     """One-sided amplitude spectrum and PSD of `x` sampled every `dt` s, mean removed, window
     "hann" or "rectangular" (C++ lash::amplitude_spectrum, FFTW): a sinusoid of amplitude A on a
     bin reads A. Returns {frequency (Hz), amplitude, psd (units^2/Hz), window}. Raises ValueError
-    for fewer than 4 samples or dt <= 0."""
+    for fewer than 4 samples, a sample that is not finite, or dt <= 0."""
     return _lash.amplitude_spectrum(_vector("x", x), _real("dt", dt, "a time step (s)"),
                                     _string("window", window, "\"hann\" or \"rectangular\""))
 

@@ -299,6 +299,9 @@ def test_analysis_functions_refuse_inconsistent_arguments():
         A.classify_motion(float("nan"), 0.012, 5, 2)
     with pytest.raises(ValueError, match=r"x: expected a 1-D sequence.*\(2, 4\)"):
         A.amplitude_spectrum(np.ones((2, 4)), 1e-3)
+    # A NaN made every amplitude NaN, with no word.
+    with pytest.raises(ValueError, match=r"^x: expected finite numbers, got nan at index 3 \(and 1 more\)$"):
+        A.amplitude_spectrum([0, 1, 0, math.nan, 0, -1, math.inf, 1], 1e-3)
 
 
 def test_overrides_may_be_one_string():
