@@ -96,6 +96,15 @@ class CvodeBdf final : public Integrator {
     N_VDestroy(v);
   }
 
+  bool reached_state(double& t, Eigen::VectorXd& y) override {
+    if (CVodeGetCurrentTime(mem_, &t) != CV_SUCCESS) return false;
+    y.resize(p_.n);
+    N_Vector v = N_VMake_Serial(p_.n, y.data(), ctx_);
+    const bool ok = CVodeGetDky(mem_, t, 0, v) == CV_SUCCESS;
+    N_VDestroy(v);
+    return ok;
+  }
+
   Advance advance(double t_out, Eigen::VectorXd& y) override {
     if (t_out <= t_) {
       for (int i = 0; i < p_.n; ++i) y[i] = NV_Ith_S(y_, i);

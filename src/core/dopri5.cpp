@@ -58,6 +58,12 @@ class Dopri5 final : public Integrator {
 
   double step_hint() const override { return h_; }
 
+  bool reached_state(double& t, Eigen::VectorXd& y) override {
+    t = t_;
+    y = y_;
+    return true;
+  }
+
   Advance advance(double t_out, Eigen::VectorXd& y) override {
     for (;;) {
       // Serve the request from the last accepted step where it lies inside.

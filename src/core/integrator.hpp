@@ -153,6 +153,9 @@ class Integrator {
   /// otherwise nullptr (then evaluate at dense_at(t1)). Dormand–Prince's last stage is its step
   /// end (first same as last), except where a step was cut at an event.
   virtual const Eigen::VectorXd* evaluated_end() const { return nullptr; }
+  /// The last point the integration reached (the last accepted step's end), which after a
+  /// failure lies past the point advance() last returned; false if there is none.
+  virtual bool reached_state(double& t, Eigen::VectorXd& y) = 0;
 
  protected:
   bool stop_requested() const { return stop_ && stop_->load(std::memory_order_relaxed) != 0; }

@@ -455,17 +455,27 @@ bool Simulator::advance_to(double t_target, Observer* observer) try {
   while (t_ < t_target) {
     const Advance adv = integrator_->advance(t_target, y_try_);
     if (adv.kind == Advance::failure) {
-      // The state stays at the last point reached (time and values together), so that
-      // final_state.json and the message describe a consistent state; the status names the
-      // time of the failure.
-      evaluate(model_, ws_, t_, y_.data(), ydot_.data());
+      // The state stays at the last point returned (time and values together), so that
+      // final_state.json holds a consistent state; the status names the time of the failure.
+      // The message and the element describe the last point the integrator reached, up to an
+      // output interval later: the state at the last output was the cause's as it stood then
+      // (a load diverging as 1/(0.5 − t) said 10 N, of 1e14 at the failure).
       std::string where;
       if (adv.component >= 0 && adv.component < ws_.ny)
         where = "; the last step's largest error was in " +
                 state_names(model_, ws_)[adv.component];
+      double t_reached = t_;
+      Eigen::VectorXd y_reached;
+      const bool later = integrator_->reached_state(t_reached, y_reached) && t_reached > t_ &&
+                         y_reached.size() == y_.size() && y_reached.allFinite() &&
+                         evaluate(model_, ws_, t_reached, y_reached.data(), ydot_.data());
+      if (!later) evaluate(model_, ws_, t_, y_.data(), ydot_.data());
+      char at[48];
+      std::snprintf(at, sizeof at, "; state at t = %.9g s: ", later ? t_reached : t_);
       status_ = {false, adv.t, fault_element(model_, ws_, adv.component),
                  std::string("integrator ") + integrator_->name() + " failed: " + adv.message +
-                     where + "; state: " + describe_contacts(model_, ws_)};
+                     where + at + describe_contacts(model_, ws_)};
+      if (later) evaluate(model_, ws_, t_, y_.data(), ydot_.data());
       return false;
     }
     t_ = adv.t;
