@@ -22,7 +22,8 @@ __all__ = ["analyze", "poincare", "verdict", "spectra", "modes", "spectrum", "am
 
 def _vector(name: str, x) -> np.ndarray:
     """`x` as a 1-D float array; TypeError naming the argument when it holds what is not a number
-    (or is a str), ValueError when it has another shape."""
+    (or is a str), ValueError when it has another shape or an entry that is not finite (every
+    function here that takes samples or points)."""
     try:
         if isinstance(x, (str, bytes)):
             raise TypeError

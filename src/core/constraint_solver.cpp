@@ -621,81 +621,69 @@ void smallest_multipliers(Workspace& ws) {
   // set (a vector of Φ_q's left null space) can be added. Those of the kept rows alone (0 on the
   // dropped ones) depend on which rows were dropped, i.e. on the model's order and the world's
   // orientation. Reported instead: the smallest multipliers with the same generalised constraint
-  // force Φ_qᵀλ, λ less its projection on the left null space, spanned by N.
+  // force Φ_qᵀλ, λ less its projection on the left null space, spanned by N: per dropped row r,
+  // e_r − Σ_a c_a e_(kept a), where Φ_rᵀ = Σ_a c_a Φ_aᵀ; c from the factorisation at hand (the
+  // augmented system with right-hand side [Φ_rᵀ; 0] has the solution [O(ε); c]).
+  // Near a singular position Φ_q has a nearly self-equilibrated set as well, along which the
+  // solve amplifies Baumgarte's terms and round-off by 1/pivot (a parallelogram's pivots, about
+  // 23.6 N through its in-line position, peaked at 220 N within 1e-3 rad of it): per weak row a,
+  // the multipliers of the solution with right-hand side e_a (inverse iteration: 1/d_a times
+  // that set, up to O(1)), with the drivers' entries left out and scaled to unit length, are
+  // one more column of N.
   const int nd = static_cast<int>(s.dropped.size()), nw = static_cast<int>(s.weak.size());
   if (s.null_basis.cols() != nd + nw) s.null_basis.resize(ws.m, nd + nw);  // near singular only
-  if (nw == 0) {
-    // Per dropped row r, e_r − Σ_a c_a e_(kept a), where Φ_rᵀ = Σ_a c_a Φ_aᵀ; c from the
-    // factorisation at hand (the augmented system with right-hand side [Φ_rᵀ; 0] has the
-    // solution [O(ε); c]). N = [e_r − Σ c_a e_a] has an identity block (each column's own
-    // dropped row), so NᵀN = I + CCᵀ has no eigenvalue below 1: the normal equations
-    // NᵀN z = Nᵀλ are well conditioned and solved by Cholesky (NᵀN formed as one rank update: a
-    // linkage with 100 parallel cranks spent 64 % of its run orthogonalising column by column).
-    for (int j = 0; j < nd; ++j) {
-      const int r = s.dropped[j];
-      s.null_work.setZero();
-      for (int k = 0; k < nq; ++k) s.null_work[s.pos[k]] = ws.phi_q(r, k);
-      s.ldlt.solve(s.null_work);
-      s.null_basis.col(j).setZero();
-      s.null_basis(r, j) = 1.0;
-      for (int a = 0; a < ma; ++a) s.null_basis(s.active[a], j) = -s.null_work[s.pos[nq + a]];
-    }
-    s.null_gram.setZero(nd, nd);
-    s.null_gram.selfadjointView<Eigen::Lower>().rankUpdate(s.null_basis.transpose());
-    const Eigen::LLT<Eigen::MatrixXd> llt(s.null_gram);
-    if (llt.info() != Eigen::Success) return;  // λ as solved
-    const Eigen::VectorXd z = llt.solve(s.null_basis.transpose() * ws.lambda);
-    ws.lambda.noalias() -= s.null_basis * z;
-    return;
+  for (int j = 0; j < nd; ++j) {
+    const int r = s.dropped[j];
+    s.null_work.setZero();
+    for (int k = 0; k < nq; ++k) s.null_work[s.pos[k]] = ws.phi_q(r, k);
+    s.ldlt.solve(s.null_work);
+    s.null_basis.col(j).setZero();
+    s.null_basis(r, j) = 1.0;
+    for (int a = 0; a < ma; ++a) s.null_basis(s.active[a], j) = -s.null_work[s.pos[nq + a]];
   }
-  // Near a singular position Φ_q has nearly self-equilibrated sets as well, along which the
-  // solve amplifies Baumgarte's terms and round-off by 1/pivot (a parallelogram's pivots, about
-  // 23.6 N through its in-line position, peaked at 220 N within 1e-3 rad of it). How far from
-  // self-equilibrated they are: per weak row a, one step of inverse iteration (the multipliers
-  // of the solution with right-hand side e_a, 1/d_a times the set up to O(1)), and the largest
-  // Φ_qᵀ image of those at unit length.
-  double weak_image = 0.0;
   for (int j = 0; j < nw; ++j) {
     s.null_work.setZero();
     s.null_work[s.pos[nq + s.weak[j]]] = 1.0;
     s.ldlt.solve(s.null_work);
-    auto col = s.null_basis.col(j);
+    auto col = s.null_basis.col(nd + j);
     col.setZero();
     for (int a = 0; a < ma; ++a) col[s.active[a]] = s.null_work[s.pos[nq + a]];
+    // Without the drivers' entries: the driver's multiplier is the power the motion needs
+    // (τω), which the self-stress carries none of in the limit; the estimate's share of it
+    // took half a driven parallelogram's torque at its in-line position (14.7 of 29.43 N·m).
+    for (const int r : ws.row_of_driver) col[r] = 0.0;
     const double norm = col.norm();
     if (!(norm > 0.0) || !std::isfinite(norm)) return;  // λ as solved
-    weak_image = std::max(weak_image, (ws.phi_q.transpose() * col).norm() / norm);
+    col /= norm;
   }
-  // N: the left singular vectors of Φ_q whose singular values are at most kWeakImageGrowth
-  // times that image, at most nd + nw of them (the self-equilibrated sets, singular value
-  // about 0, among them). The inverse iteration's columns themselves, orthogonalised one
-  // against another, were N before: weak rows can outnumber the nearly dependent sets (three
-  // rows of a double parallelogram in line, one set beside the redundant one), and what was
-  // left of a column after the others was their error scaled up, with a net force: removing λ
-  // along it took 21.5 N off a coupler's resultant. Left out, the columns kept were not near
-  // enough to the set, and the solve's amplified multipliers along it stayed (3 782 N for 62).
-  constexpr double kWeakImageGrowth = 10.0;
-  const Eigen::BDCSVD<Eigen::MatrixXd> svd(ws.phi_q, Eigen::ComputeFullU);
-  const Eigen::VectorXd& sv = svd.singularValues();
+  // λ less its projection on the span of N. With redundant rows only, N = [e_r − Σ c_a e_a] has
+  // an identity block (each column's own dropped row), so NᵀN = I + CCᵀ has no eigenvalue below
+  // 1: the normal equations NᵀN z = Nᵀλ are well conditioned and solved by Cholesky (NᵀN formed
+  // as one rank update: a linkage with 100 parallel cranks spent 64 % of its run in the
+  // orthogonalisation below, O(m·nd²) column by column).
+  if (nw == 0) {
+    s.null_gram.setZero(nd, nd);
+    s.null_gram.selfadjointView<Eigen::Lower>().rankUpdate(s.null_basis.transpose());
+    const Eigen::LLT<Eigen::MatrixXd> llt(s.null_gram);
+    if (llt.info() == Eigen::Success) {
+      const Eigen::VectorXd z = llt.solve(s.null_basis.transpose() * ws.lambda);
+      ws.lambda.noalias() -= s.null_basis * z;
+      return;
+    }
+  }
+  // Near a singular position, through an orthonormal basis (modified Gram–Schmidt, twice): the
+  // two kinds of columns can be nearly parallel there, and (NᵀN)⁻¹ then amplifies round-off
+  // (a double parallelogram in line reported 3.3e4 N). A column within 1e-8 of the span of
+  // those before it adds nothing.
   int kept = 0;
-  for (int i = ws.m - 1; i >= 0 && kept < nd + nw; --i) {
-    const double sigma = i < sv.size() ? sv[i] : 0.0;
-    if (!(sigma <= kWeakImageGrowth * weak_image) && kept >= nd) break;
-    auto col = s.null_basis.col(kept);
-    col = svd.matrixU().col(i);
-    // Without the drivers' entries: the driver's multiplier is the power the motion needs
-    // (τω), which the self-stress carries none of in the limit; its share took half a driven
-    // parallelogram's torque at its in-line position (14.7 of 29.43 N·m).
-    for (const int r : ws.row_of_driver) col[r] = 0.0;
-    // Orthonormal again (modified Gram–Schmidt, twice); a column within 1e-8 of the span of
-    // those before it adds nothing.
+  for (int j = 0; j < nd + nw; ++j) {
+    auto col = s.null_basis.col(j);
     const double before = col.norm();
     for (int pass = 0; pass < 2; ++pass)
-      for (int k = 0; k < kept; ++k) col -= s.null_basis.col(k).dot(col) * s.null_basis.col(k);
+      for (int i = 0; i < kept; ++i) col -= s.null_basis.col(i).dot(col) * s.null_basis.col(i);
     const double after = col.norm();
     if (!(after > 1e-8 * before)) continue;
-    col /= after;
-    ++kept;
+    s.null_basis.col(kept++) = col / after;
   }
   for (int i = 0; i < kept; ++i) ws.lambda -= s.null_basis.col(i).dot(ws.lambda) * s.null_basis.col(i);
 }

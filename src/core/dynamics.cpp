@@ -554,12 +554,8 @@ bool evaluate(const Model& model, Workspace& ws, double t, const double* y, doub
     // γ_B = γ − 2αΦ̇ − β²Φ.
     ws.rhs_m = ws.gamma - (2.0 * a) * ws.phi_dot - (b * b) * ws.phi;
     if (!solve_constraints(ws)) return false;
-    // Redundant rows: the ones dropped are chosen again where the kept ones grow weak, by the
-    // integrator's evaluations only, so that the motion does not depend on what is observed
-    // (the extrema's probes counted towards kReselectWait, and reported reactions that moved a
-    // turning-point search moved a choice, and with it a five-crank parallelogram's branch).
-    if (ws.integrating && kept_rows_weak(ws) && reselect_redundant_rows(model, ws) &&
-        !solve_constraints(ws))
+    // Redundant rows: the ones dropped are chosen again where the kept ones grow weak.
+    if (kept_rows_weak(ws) && reselect_redundant_rows(model, ws) && !solve_constraints(ws))
       return false;
     // Power of the constraint forces λ·Φ_q q̇ = λ·(Φ̇ − Φ_t), split into the drivers' input
     // −λΦ_t (Φ_t = 0 for every other row) and the work on the drift, λ·Φ̇: Baumgarte's, which

@@ -466,9 +466,13 @@ bool Simulator::advance_to(double t_target, Observer* observer) try {
                 state_names(model_, ws_)[adv.component];
       double t_reached = t_;
       Eigen::VectorXd y_reached;
-      const bool later = integrator_->reached_state(t_reached, y_reached) && t_reached > t_ &&
-                         y_reached.size() == y_.size() && y_reached.allFinite() &&
-                         evaluate(model_, ws_, t_reached, y_reached.data(), ydot_.data());
+      bool later = integrator_->reached_state(t_reached, y_reached) && t_reached > t_ &&
+                   y_reached.size() == y_.size() && y_reached.allFinite();
+      try {  // (an expression failing there must not take the integrator's message's place)
+        later = later && evaluate(model_, ws_, t_reached, y_reached.data(), ydot_.data());
+      } catch (const std::exception&) {
+        later = false;
+      }
       if (!later) evaluate(model_, ws_, t_, y_.data(), ydot_.data());
       char at[48];
       std::snprintf(at, sizeof at, "; state at t = %.9g s: ", later ? t_reached : t_);
