@@ -254,6 +254,10 @@ TEST(StudyFile, ProblemsAreLocatedInTheStudyFile) {
                      "  joints.rod_slider.clearance: {values: [1.0e-4]}\n")
                 .find("zip needs the same number of levels"),
             std::string::npos);
+  // An empty level: it became the text '~', refused only when its run started.
+  const std::string empty = problems("parameters:\n  drivers.crank.speed_rpm: {values: [1000, ~]}\n");
+  EXPECT_NE(empty.find("s.yaml:4:44: parameter 'drivers.crank.speed_rpm': a level is empty (~ or nothing), expected a value"),
+            std::string::npos) << empty;
   // At the drawn parameter (it was the file's start, 1:1).
   const std::string drawn = problems("parameters:\n  drivers.crank.speed_rpm: {min: 1, max: 2}\n");
   EXPECT_NE(drawn.find("s.yaml:4:3: parameters with min/max are drawn: add sampling"),

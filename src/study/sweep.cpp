@@ -190,6 +190,8 @@ void read_parameter(Reader& r, const YAML::Node& key, const YAML::Node& v, Study
       return;
     }
     for (const auto& e : v["values"]) {
+      if (e.IsNull())  // (it became the text level '~', refused only when its run started)
+        r.error(e, where + ": a level is empty (~ or nothing), expected a value");
       p.values.push_back(override_text(e));
       char* end = nullptr;
       const double d = std::strtod(p.values.back().c_str(), &end);
