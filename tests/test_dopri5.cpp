@@ -282,6 +282,54 @@ TEST(Failure, AStallIsMeasuredAgainstTheRunsEnd) {
   }
 }
 
+TEST(Failure, BdfMaxStepsCountsTheWholeRun) {
+  // y' = cos(1e6 t): BDF resolves each period (6.3e-6 s) in tens of steps, about 1e7 steps a
+  // second. With a budget of 2e5 steps and outputs every 1e-3 s (a few thousand steps each),
+  // every output interval is within the budget; counted per interval, as before, the run to
+  // t = 1 s went on for its 1e7 steps (a load of 1e3 sin(1e9 t) took hours). Counted over the
+  // run, the pace after the first window (2e4 steps) already puts t = 1 s out of reach.
+  OdeProblem p;
+  p.n = 1;
+  p.rhs = [](double t, const double*, double* dy) {
+    dy[0] = std::cos(1e6 * t);
+    return true;
+  };
+  IntegratorOptions o;
+  o.rtol = 1e-6;
+  o.atol = 1e-9;
+  o.max_steps = 200'000;
+  o.end_time = 1.0;
+  auto integ = make_cvode_bdf(p, o);
+  integ->set_step_hook([](double, double) {});
+  Eigen::VectorXd y(1);
+  y << 0.0;
+  integ->reset(0, y);
+  Advance a;
+  int outputs = 0;
+  for (int k = 1; k <= 1000; ++k) {
+    a = integ->advance(k * 1e-3, y);
+    if (a.kind != Advance::reached) break;
+    ++outputs;
+  }
+  ASSERT_EQ(a.kind, Advance::failure) << "reached t = 1 s in " << integ->stats().steps << " steps";
+  EXPECT_NE(a.message.find("stalled: the last 20000 steps advanced t by "), std::string::npos)
+      << a.message;
+  EXPECT_NE(a.message.find("at either pace t = 1 s is more steps away"), std::string::npos)
+      << a.message;
+  EXPECT_LE(integ->stats().steps, 20000);
+  EXPECT_GE(outputs, 1);  // a single output interval is within the budget
+  // Without a step hook (CVODE's normal mode) the budget is the whole run's too: what one
+  // call may take is what is left.
+  auto plain = make_cvode_bdf(p, o);
+  y << 0.0;
+  plain->reset(0, y);
+  bool failed = false;
+  for (int k = 1; k <= 1000 && !failed; ++k)
+    failed = plain->advance(k * 1e-3, y).kind == Advance::failure;
+  EXPECT_TRUE(failed);
+  EXPECT_LE(plain->stats().steps, 200000 + 10);
+}
+
 TEST(Failure, BdfCreepingAtADiscontinuityStopsAsStalled) {
   // y' = -sign(y) chatters about y = 0 once it gets there (t = 1): CVODE's steps shrink to the
   // absolute tolerance and it crept on toward t = 2 until max_steps. One-step mode (a step hook,

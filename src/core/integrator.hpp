@@ -38,8 +38,8 @@ struct IntegratorOptions {
   double max_step = 0.0;    ///< 0: unlimited
   long max_steps = 50'000'000;
   double first_step = 0.0;  ///< 0: chosen automatically
-  /// The run's end (0: unknown): DOPRI5, whose max_steps counts the whole run, measures a
-  /// stall (StallCheck) against the steps left to reach it.
+  /// The run's end (0: unknown): both integrators, whose max_steps counts the whole run,
+  /// measure a stall (StallCheck) against the steps left to reach it.
   double end_time = 0.0;
 };
 
@@ -56,7 +56,7 @@ class StallCheck {
  public:
   explicit StallCheck(long max_steps)
       : window_(std::max(1000L, std::min(100'000L, max_steps / 10))) {}
-  /// Starts the count the budget is measured over at t (BDF: each output interval).
+  /// Starts the count the budget is measured over at t (else at the first step's start).
   void begin(double t) {
     origin_ = t;
     total_ = 0;
