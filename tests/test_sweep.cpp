@@ -848,6 +848,30 @@ TEST(SweepCli, AFailingRunIsRecordedAndTheRestComplete) {
   fs::remove_all(dir);
 }
 
+TEST(SweepCli, AStudyWhoseEveryRunFailedExitsWithOne) {
+  // Nothing to analyse: `lash sweep … && lash report …` must stop. The runs stay recorded, so a
+  // resume runs nothing and says the same; a study with one completed run exits 0 (above).
+  const fs::path dir = temp_dir("all_failed");
+  const fs::path study = write_study(
+      dir, "set: {solver.end_time: 0.03}\n"
+           "parameters:\n"
+           "  joints.rod_slider.clearance: {values: [2.0e-4, 3.0e-4]}\n"
+           "  solver.max_steps: {values: [50]}\n"
+           "transient: {periods: 1}\n");
+  for (const char* resume : {"", " --resume"}) {
+    SCOPED_TRACE(resume);
+    const Result r = lash_cmd("sweep " + study.string() + resume + " -o " + (dir / "out").string());
+    EXPECT_EQ(r.code, 1) << r.out;
+    EXPECT_NE(r.out.find("2 runs in"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("error: every one of the 2 runs failed; run 0: "), std::string::npos)
+        << r.out;
+    EXPECT_NE(r.out.find("maximum number of steps (50) reached"), std::string::npos) << r.out;
+  }
+  EXPECT_EQ(query(dir / "out" / "study.db", "select count(*) from runs"),
+            std::vector<std::string>{"2"});
+  fs::remove_all(dir);
+}
+
 TEST(SweepCli, ARunsFolderAndAStudysFolderAreNotOne) {
   // `lash run` into a study's folder was accepted, and `lash report` then reported the study
   // alone: the run's results were never reported. Each now refuses the other's folder, and

@@ -29,7 +29,7 @@
 namespace lash::cli {
 namespace {
 
-constexpr int kExitOk = 0, kExitBadInput = 2, kExitIo = 3, kExitInterrupted = 130;
+constexpr int kExitOk = 0, kExitFailed = 1, kExitBadInput = 2, kExitIo = 3, kExitInterrupted = 130;
 
 std::string duration_text(double s) {
   // Rounded to the unit shown last before it is split (3 h 59.6 min is 4 h 0 min, not 3 h 60 min).
@@ -217,9 +217,18 @@ int finish(StudyFolder& f, int total, const Progress& progress, int interrupted_
               << " runs are recorded in " << out << "/study.db; `--resume` runs the rest\n";
     return kExitInterrupted;
   }
+  const int failed = f.db().failed();
   if (!quiet)
     fmt::print("study: {} runs in {}/study.db ({} failed); runs.csv and sections.csv beside it\n",
-               recorded, out, f.db().failed());
+               recorded, out, failed);
+  if (recorded > 0 && failed == recorded) {
+    // Nothing to analyse: a script running `lash sweep && lash report` stops here. Every run is
+    // recorded (a --resume does not run them again), so the cause is the study or its model.
+    const RunRecord first = f.db().recorded(*f.db().finished().begin());
+    std::cerr << "error: every one of the " << recorded << " runs failed; run "
+              << first.index << ": " << first.message << "\n";
+    return kExitFailed;
+  }
   return kExitOk;
 }
 

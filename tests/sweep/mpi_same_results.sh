@@ -45,7 +45,7 @@ PY
 cat > "$dir/cont.yaml" <<YAML
 study: cont
 model: $src/examples/flores_slider_crank.yaml
-set: {solver.end_time: 0.012, solver.output_interval: 1.0e-4}
+set: {solver.end_time: 0.03, solver.output_interval: 1.0e-4}
 parameters:
   drivers.crank.speed_rpm: {values: [4000, 5000]}
 continuation: up
