@@ -157,10 +157,10 @@ TEST(StudyFile, CrossZipRangesAndCases) {
   EXPECT_DOUBLE_EQ(lr[2].numbers[0], 1e-3);
 
   // Ranges at the ends of the doubles: every level finite (1e308 to 1e308 gave inf).
-  for (const char* range : {"{from: 1e308, to: 1e308, count: 3}", "{from: 1e308, to: -1e308, count: 3}",
+  for (const char* range : {"{from: 1e308, to: 1e308, count: 1}", "{from: 1e308, to: -1e308, count: 3}",
                             "{from: 1.7976931348623157e308, to: 0, count: 4}"}) {
     const auto big = study_runs(from_text("parameters:\n  bodies.crank.mass: " + std::string(range) + "\n"));
-    ASSERT_GE(big.size(), 3u) << range;
+    ASSERT_GE(big.size(), std::string(range).find("count: 1}") != std::string::npos ? 1u : 3u) << range;
     for (const auto& run : big) EXPECT_TRUE(std::isfinite(run.numbers[0])) << range << ": " << run.values[0];
     EXPECT_EQ(big[0].numbers[0], std::strtod(std::string(range).substr(7).c_str(), nullptr)) << range;
   }
@@ -179,6 +179,38 @@ TEST(StudyFile, CrossZipRangesAndCases) {
   EXPECT_NE(cr[1].model.find("crank_rod_clearance"), std::string::npos);
   EXPECT_EQ(cr[1].overrides.back(), "joints.crank_rod.clearance=2.0e-4");
   EXPECT_EQ(cr[0].model, cases.model);
+}
+
+TEST(StudyFile, ALevelListedTwiceIsRefusedWhereItIs) {
+  // The same run made twice, and a report with two points for one value: refused at the second
+  // occurrence; numbers compare as numbers.
+  const auto problem = [](const std::string& params, const std::string& extra = "") {
+    try {
+      from_text(extra + "parameters:\n" + params);
+    } catch (const ModelError& e) {
+      return e.diagnostics().front().str();
+    }
+    return std::string("accepted");
+  };
+  EXPECT_EQ(problem("  drivers.crank.speed_rpm: {values: [4000, 5000, 5.0e3]}\n"),
+            "s.yaml:4:50: parameter 'drivers.crank.speed_rpm': level 5.0e3 is listed twice (levels 2 "
+            "and 3); its runs would be made twice");
+  EXPECT_NE(problem("  drivers.crank.speed_rpm: {from: 4000, to: 4000, count: 3}\n")
+                .find("s.yaml:4:28: parameter 'drivers.crank.speed_rpm': level 4000 comes twice from the range"),
+            std::string::npos);
+  EXPECT_NE(problem("  solver.integrator: {values: [bdf, dopri5, bdf]}\n").find("level bdf is listed twice"),
+            std::string::npos);
+  // zip: a parameter may repeat a level; a whole row may not.
+  EXPECT_EQ(problem("  drivers.crank.speed_rpm: {values: [4000, 5000, 4000]}\n"
+                    "  joints.rod_slider.clearance: {values: [1.0e-4, 2.0e-4, 3.0e-4]}\n", "combine: zip\n"),
+            "accepted");
+  EXPECT_NE(problem("  drivers.crank.speed_rpm: {values: [4000, 5000, 4000]}\n"
+                    "  joints.rod_slider.clearance: {values: [1.0e-4, 2.0e-4, 1.0e-4]}\n", "combine: zip\n")
+                .find("combine: zip: levels 1 and 3 are the same in every parameter"),
+            std::string::npos);
+  // A continuation chain may come back to a level: from another state, another run.
+  EXPECT_EQ(problem("  drivers.crank.speed_rpm: {values: [8000, 2000, 8000]}\n", "continuation: up\n"),
+            "accepted");
 }
 
 TEST(StudyFile, LatinHypercubeFillsEveryStratumOnceAndIsReproducible) {

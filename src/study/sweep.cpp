@@ -535,6 +535,54 @@ StudySpec load_study_text(const std::string& text, const std::string& file,
       r.error(c, "continuation: needs exactly one parameter with listed levels (values or "
                  "from/to/count), run in order");
   }
+  // A level listed twice would make its runs twice (the same model, the same results) and give
+  // a report two rows or points for one value: a slip in the list, refused where it is. Numbers
+  // compare as numbers (5000 and 5.0e3 are one level). Under zip a parameter may repeat a level
+  // (it pairs with different levels of the others): there a whole row of levels must not repeat.
+  // A continuation chain may come back to a level (8000, 2000, 8000): from another state.
+  if (spec.continuation.empty()) {
+    const auto same = [&](const StudyParameter& p, size_t a, size_t b) {
+      return std::isnan(p.numbers[a]) || std::isnan(p.numbers[b]) ? p.values[a] == p.values[b]
+                                                                   : p.numbers[a] == p.numbers[b];
+    };
+    const auto node_of = [&](const StudyParameter& p, size_t k) -> YAML::Node {
+      const YAML::Node v = params[p.name];
+      if (v && v.IsMap() && v["values"] && v["values"].IsSequence() && k < v["values"].size())
+        return v["values"][k];
+      return v ? v : params;
+    };
+    const bool zip = spec.combine == "zip" && !any_sampled;
+    const size_t n_levels = spec.parameters.empty() ? 0 : spec.parameters.front().values.size();
+    bool sizes_agree = true;
+    for (const auto& p : spec.parameters) sizes_agree = sizes_agree && p.values.size() == n_levels;
+    if (zip && sizes_agree) {
+      for (size_t k = 1; k < n_levels; ++k)
+        for (size_t j = 0; j < k; ++j)
+          if (std::all_of(spec.parameters.begin(), spec.parameters.end(),
+                          [&](const StudyParameter& p) { return same(p, j, k); })) {
+            r.error(node_of(spec.parameters.front(), k),
+                    "combine: zip: levels " + std::to_string(j + 1) + " and " + std::to_string(k + 1) +
+                        " are the same in every parameter (" + spec.parameters.front().name + ": " +
+                        spec.parameters.front().values[k] + "); that run would be made twice");
+            break;
+          }
+    } else if (!zip) {
+      for (const auto& p : spec.parameters) {
+        if (p.sampled || !p.case_overrides.empty()) continue;  // (case names are map keys)
+        const auto twice = [&]() -> std::pair<size_t, size_t> {
+          for (size_t k = 1; k < p.values.size(); ++k)
+            for (size_t j = 0; j < k; ++j)
+              if (same(p, j, k)) return {j, k};
+          return {0, 0};
+        };
+        if (const auto [j, k] = twice(); k > 0)
+          r.error(node_of(p, k), "parameter '" + p.name + "': level " + p.values[k] +
+                                     (node_of(p, k).IsScalar() ? " is listed twice" : " comes twice from the range") +
+                                     " (levels " + std::to_string(j + 1) + " and " + std::to_string(k + 1) +
+                                     "); its runs would be made twice");
+      }
+    }
+  }
   if (!r.list.empty()) throw ModelError(r.list);
 
   // How many runs: refused past kMaxRuns before anything is listed.
