@@ -22,4 +22,8 @@ inline Vec2 perp(const Vec2& v) { return Vec2(-v.y(), v.x()); }
 /// Planar cross product a × b (the z component).
 inline double cross(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
 
+/// |v| without overflow or underflow of the squares: a force of 1e155 N is 1e155 N, not inf
+/// (Eigen's norm() squares first). For channels, which a failing run's message reports.
+inline double magnitude(const Vec2& v) { return std::hypot(v.x(), v.y()); }
+
 }  // namespace lash

@@ -53,7 +53,7 @@ void apply(const Model&, Workspace& ws, const Load& l, int index) {
 void channels(const Load&, const LoadOutput& o, ChannelSink& s) {
   s.add("Fx", "N", "force on body b, x", o.force.x());
   s.add("Fy", "N", "force on body b, y", o.force.y());
-  s.add("F", "N", "force magnitude", o.force.norm());
+  s.add("F", "N", "force magnitude", magnitude(o.force));
   s.add("dx", "m", "deflection b − a along the frame's x axis", o.deflection.x());
   s.add("dy", "m", "deflection b − a along the frame's y axis", o.deflection.y());
   s.add("torque", "N·m", "torsional part, on body a", o.torque);

@@ -103,7 +103,7 @@ void clearance_channels(const Model& model, const Workspace& ws, int k, ChannelS
   s.add("mode", "", "contact mode: 0 free flight, 1 contact", ws.contact[k].in_contact ? 1 : 0);
   s.add("Fx", "N", "contact force on the journal, x", o.force.x());
   s.add("Fy", "N", "contact force on the journal, y", o.force.y());
-  s.add("F", "N", "contact force magnitude", o.force.norm());
+  s.add("F", "N", "contact force magnitude", magnitude(o.force));
 }
 
 }  // namespace lash

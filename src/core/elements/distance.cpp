@@ -41,7 +41,7 @@ void channels(const Model&, const Workspace& ws, const Joint& j, int row, Channe
   const Vec2 f_a = -lam * d / std::max(d.norm(), 1e-300);  // Φ_qᵀλ on body a's point: −λu
   s.add("Fx", "N", "rod force on body a, x", f_a.x());
   s.add("Fy", "N", "rod force on body a, y", f_a.y());
-  s.add("F", "N", "rod force magnitude", f_a.norm());
+  s.add("F", "N", "rod force magnitude", magnitude(f_a));
   s.add("tension", "N", "rod tension (> 0 pulls the points together)", -lam);
 }
 

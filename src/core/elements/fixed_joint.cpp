@@ -20,7 +20,7 @@ void channels(const Model&, const Workspace& ws, const Joint&, int row, ChannelS
   const Vec2 f = ws.lambda.segment<2>(row);
   s.add("Fx", "N", "reaction on body a, x", f.x());
   s.add("Fy", "N", "reaction on body a, y", f.y());
-  s.add("F", "N", "reaction magnitude", f.norm());
+  s.add("F", "N", "reaction magnitude", magnitude(f));
 }
 
 }  // namespace

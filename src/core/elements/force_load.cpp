@@ -17,7 +17,7 @@ void apply(const Model&, Workspace& ws, const Load& l, int index) {
 void channels(const Load&, const LoadOutput& o, ChannelSink& s) {
   s.add("Fx", "N", "applied force, x", o.force.x());
   s.add("Fy", "N", "applied force, y", o.force.y());
-  s.add("F", "N", "applied force magnitude", o.force.norm());
+  s.add("F", "N", "applied force magnitude", magnitude(o.force));
   s.add("power", "W", "power delivered to the mechanism", o.power);
 }
 

@@ -23,7 +23,7 @@ void channels(const Model& m, const Workspace& ws, const Joint& j, int row, Chan
   const Vec2 f = ws.lambda[dot] * perp(ws.kin_of(j.a.body).A * j.axis);
   s.add("Fx", "N", "guide's normal force on the slider, x", f.x());
   s.add("Fy", "N", "guide's normal force on the slider, y", f.y());
-  s.add("F", "N", "guide's normal force magnitude", f.norm());
+  s.add("F", "N", "guide's normal force magnitude", magnitude(f));
 }
 
 }  // namespace
