@@ -904,6 +904,32 @@ TEST(SweepCli, AStudyWhoseEveryRunFailedExitsWithOne) {
   fs::remove_all(dir);
 }
 
+TEST(SweepCli, PathsThatAreNotUtf8AreStudiedAndResumed) {
+  // A Latin-1 file name (0xE9, é) in the study's path and its model's: JSON's writer refused
+  // them (the study aborted with an uncaught exception; the model's name gave an unlocated
+  // exit 2). Under MPI the study travels as MessagePack (tests/sweep/mpi_same_results.sh).
+  const fs::path dir = temp_dir("latin1");
+  const std::string model = "m_\xe9.yaml", name = "st_\xe9.yaml";
+  fs::copy_file(example(), dir / model);
+  std::ofstream(dir / name) << "study: latin1\nmodel: " << model
+                            << "\nset: {solver.end_time: 0.03}\ntransient: {periods: 1}\n"
+                               "parameters:\n  joints.rod_slider.clearance: {values: [1.0e-4, 3.0e-4]}\n";
+  const std::string cmd = "sweep '" + (dir / name).string() + "' -q -j 1 -o " + (dir / "out").string();
+  Result r = lash_cmd(cmd);
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_EQ(query(dir / "out" / "study.db", "select run, status from runs order by run"),
+            (std::vector<std::string>{"0|completed", "1|completed"}));
+  r = lash_cmd(cmd + " --resume");
+  EXPECT_EQ(r.code, 0) << r.out;
+  // An edited model is still told from the one the study began with.
+  std::ofstream(dir / model, std::ios::app) << "# edited\n";
+  r = lash_cmd(cmd + " --resume");
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("the model file(s) changed since this study began (m_\\xE9.yaml)"), std::string::npos)
+      << r.out;
+  fs::remove_all(dir);
+}
+
 TEST(SweepCli, ARunsFolderAndAStudysFolderAreNotOne) {
   // `lash run` into a study's folder was accepted, and `lash report` then reported the study
   // alone: the run's results were never reported. Each now refuses the other's folder, and

@@ -276,7 +276,7 @@ int mpi_worker(std::atomic<int>& interrupt) {
   std::string bundle;
   broadcast_text(bundle);
   if (bundle.empty()) return kExitOk;  // rank 0 refused the study; it says why
-  const auto j = nlohmann::json::parse(bundle);
+  const auto j = nlohmann::json::from_msgpack(bundle);
   std::map<std::string, std::string> models = j.at("models");
   const StudySpec spec = load_study_text(j.at("text"), j.at("file"),
                                          [&](const std::string& p) { return models.at(p); });
@@ -289,7 +289,8 @@ int mpi_worker(std::atomic<int>& interrupt) {
     const RunRecord rec = run_study_point(spec, runs.at(index), &interrupt);
     nlohmann::json message = to_json(rec);
     message["signal"] = interrupt.load();  // this rank's own stop request, for rank 0
-    send_text(message.dump(), 0, kTagResult);
+    const std::vector<std::uint8_t> bytes = nlohmann::json::to_msgpack(message);
+    send_text(std::string(bytes.begin(), bytes.end()), 0, kTagResult);
   }
   return kExitOk;
 }
@@ -376,7 +377,11 @@ int SweepCommand::run(std::atomic<int>& interrupt, const std::function<void()>& 
   if (code < 0) {
     nlohmann::json models = nlohmann::json::object();
     for (const auto& [p, t] : spec.model_texts) models[p] = t;
-    bundle = nlohmann::json{{"file", spec.file}, {"text", spec.text}, {"models", models}}.dump();
+    // MessagePack, not JSON text: its strings are bytes, so a path or a model text that is not
+    // UTF-8 (Latin-1) reaches the workers as it is (JSON's writer refuses it).
+    const std::vector<std::uint8_t> bytes = nlohmann::json::to_msgpack(
+        nlohmann::json{{"file", spec.file}, {"text", spec.text}, {"models", models}});
+    bundle.assign(bytes.begin(), bytes.end());
   }
 #ifdef LASH_MPI
   if (size > 1) broadcast_text(bundle);  // empty: the workers stop
@@ -413,7 +418,7 @@ int SweepCommand::run(std::atomic<int>& interrupt, const std::function<void()>& 
         std::string msg(n, '\0');
         MPI_Recv(msg.data(), n, MPI_CHAR, st.MPI_SOURCE, kTagResult, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
         if (!msg.empty() && write_error.empty()) {
-          const nlohmann::json message = nlohmann::json::parse(msg);
+          const nlohmann::json message = nlohmann::json::from_msgpack(msg);
           const RunRecord rec = record_from_json(message);
           // A rank stopped by a signal of its own stops the sweep as one to this rank would:
           // the runs it would be handed all came back interrupted, and unrecorded.

@@ -95,6 +95,40 @@ std::string now_utc() {
   return buf;
 }
 
+/// `s` as valid UTF-8, for JSON (whose writer refuses anything else): well-formed sequences
+/// (RFC 3629) as they are, every other byte as the four characters \xNN. Distinct texts stay
+/// distinct unless one holds such an escape literally; a path or a model text in Latin-1 is
+/// compared, not refused.
+std::string utf8_escaped(const std::string& s) {
+  const auto in = [](unsigned char c, unsigned lo, unsigned hi) { return c >= lo && c <= hi; };
+  std::string out;
+  out.reserve(s.size());
+  for (size_t i = 0; i < s.size();) {
+    const auto b = [&](size_t k) { return i + k < s.size() ? static_cast<unsigned char>(s[i + k]) : 0; };
+    const unsigned char c = b(0);
+    size_t n = 0;
+    if (c < 0x80) n = 1;
+    else if (in(c, 0xC2, 0xDF)) n = in(b(1), 0x80, 0xBF) ? 2 : 0;
+    else if (in(c, 0xE0, 0xEF)) {
+      const unsigned lo = c == 0xE0 ? 0xA0 : 0x80, hi = c == 0xED ? 0x9F : 0xBF;
+      n = in(b(1), lo, hi) && in(b(2), 0x80, 0xBF) ? 3 : 0;
+    } else if (in(c, 0xF0, 0xF4)) {
+      const unsigned lo = c == 0xF0 ? 0x90 : 0x80, hi = c == 0xF4 ? 0x8F : 0xBF;
+      n = in(b(1), lo, hi) && in(b(2), 0x80, 0xBF) && in(b(3), 0x80, 0xBF) ? 4 : 0;
+    }
+    if (n > 0) {
+      out.append(s, i, n);
+      i += n;
+    } else {
+      char hex[5];
+      std::snprintf(hex, sizeof hex, "\\x%02X", c);
+      out += hex;
+      ++i;
+    }
+  }
+  return out;
+}
+
 /// The model files' texts by their paths as the study file names them (relative to its folder),
 /// so the same study resumes however its own path is spelled (absolute, from another folder);
 /// `as_given`: by the paths as this process spelled them (what older databases recorded).
@@ -105,7 +139,7 @@ std::string model_texts_json(const StudySpec& spec, bool as_given = false) {
   for (const auto& [path, text] : spec.model_texts) {
     fs::path key = base.empty() || as_given ? fs::path(path) : fs::path(path).lexically_relative(base);
     if (key.empty()) key = path;
-    j[key.string()] = text;
+    j[utf8_escaped(key.string())] = utf8_escaped(text);
   }
   return j.dump();
 }

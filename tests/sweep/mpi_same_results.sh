@@ -83,3 +83,14 @@ if [ "$recorded" -lt 12 ]; then
   grep -q "resume" "$dir/long.err" || { cat "$dir/long.err"; exit 1; }
 fi
 echo "continuation refused with no folder; a worker's signal stopped the sweep (exit $rc, $recorded of 12 recorded)"
+
+# A study and a model whose file names are not UTF-8 (Latin-1 é): the study travels to the
+# workers as MessagePack, byte for byte (JSON's writer refused such names).
+latin="$(printf 'st_\xe9')"; mlatin="$(printf 'm_\xe9.yaml')"
+cp "$src/examples/flores_slider_crank.yaml" "$dir/$mlatin"
+printf 'study: latin1\nmodel: %s\nset: {solver.end_time: 0.03}\ntransient: {periods: 1}\nparameters:\n  joints.rod_slider.clearance: {values: [1.0e-4, 3.0e-4]}\n' \
+  "$mlatin" > "$dir/$latin.yaml"
+mpirun --oversubscribe -n 2 "$lash" sweep "$dir/$latin.yaml" -q -o "$dir/latin"
+n="$(python3 -c 'import sqlite3, sys; print(sqlite3.connect(sys.argv[1]).execute("select count(*) from runs where status = ?", ("completed",)).fetchone()[0])' "$dir/latin/study.db")"
+[ "$n" = 2 ] || { echo "Latin-1 names under mpirun: $n of 2 runs completed"; exit 1; }
+echo "Latin-1 file names under mpirun: 2 of 2 runs completed"
