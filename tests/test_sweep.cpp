@@ -496,6 +496,40 @@ TEST(StudyRun, PeakMetricsDoNotDependOnTheOutputInterval) {
   }
 }
 
+TEST(StudyRun, AContinuedRunKeepsAsManySeriesPointsAsTheFirst) {
+  // The series is decimated over the run's own outputs: a continued run's end_time counts from
+  // t = 0 (0.06 s for the second run here), and counting its outputs from there kept 24 points
+  // of 50 in the second run, fewer down the chain.
+  const StudySpec spec = from_text(
+      "set: {solver.end_time: 0.03, solver.output_interval: 1.0e-4}\n"
+      "parameters:\n  drivers.crank.speed_rpm: {values: [5000]}\n"
+      "continuation: both\ntransient: {periods: 0}\n"
+      "keep: {series: {channels: [slider.ax], points: 50}}\n");
+  const auto runs = study_runs(spec);
+  const RunRecord first = run_study_point(spec, runs[0]);
+  ASSERT_EQ(first.status, "completed") << first.message;
+  const RunRecord second = run_study_point(spec, runs[1], nullptr, &first);
+  ASSERT_EQ(second.status, "completed") << second.message;
+  EXPECT_EQ(first.series_time.size(), 43u);  // 301 outputs, every 7th
+  EXPECT_EQ(second.series_time.size(), first.series_time.size());
+}
+
+TEST(StudyRun, ATransientOfMoreThanAMillionPeriodsIsSaidInTheStudysTerms) {
+  // 1000.5 s at 60 000 rpm is 1.0005e6 crank periods: the analyses' limit, which the run's
+  // message gave as an option the study has not ("--discard 1000500"); at 1e300 rpm the
+  // period count overflowed an int.
+  for (const char* speed : {"60000", "1.0e+300"}) {
+    const StudySpec spec = from_text(std::string("set: {solver.end_time: 1001, solver.output_interval: 0.01}\n") +
+                                     "transient: {time: 1000.5}\nparameters:\n  drivers.crank.speed_rpm: {values: [" +
+                                     speed + "]}\n");
+    const RunRecord r = run_study_point(spec, study_runs(spec)[0]);
+    EXPECT_EQ(r.status, "error") << speed;
+    EXPECT_NE(r.message.find("the transient (1000.5 s) is "), std::string::npos) << r.message;
+    EXPECT_NE(r.message.find(" periods of the driver at this speed; at most 1000000"), std::string::npos)
+        << r.message;
+  }
+}
+
 TEST(StudyRun, ContinuationStartsEachRunWhereThePreviousEnded) {
   // Up then down over one level: run 1 continues run 0 at the same speed, so its journal motion
   // is that of one uninterrupted run of twice the length, up to the integrator's restart.

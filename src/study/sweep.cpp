@@ -881,7 +881,9 @@ std::vector<std::string> metric_channel_names(const Model& model, const StudySpe
 /// Keeps the study's channels at every section and, decimated, at the outputs.
 class Keep : public Observer {
  public:
-  Keep(const Model& model, const Workspace& ws, const StudySpec& spec, RunRecord& rec, double t_transient)
+  /// The run starts at t_begin (a continuation run: where the previous one ended).
+  Keep(const Model& model, const Workspace& ws, const StudySpec& spec, RunRecord& rec, double t_begin,
+       double t_transient)
       : model_(model), rec_(rec), t_transient_(t_transient) {
     const auto info = channel_info(model, ws);
     // A kept channel this run's model lacks (a clearance joint made ideal) is left out of its
@@ -899,7 +901,9 @@ class Keep : public Observer {
     for (const auto& c : spec.series)
       if (const int i = index(c); i >= 0) series_index_.push_back(i), rec_.series_channels.push_back(c);
     values_.assign(info.size(), 0.0);
-    const double n_out = std::ceil(model.solver.end_time / model.solver.output_interval - 1e-9) + 1;
+    // The run's outputs, from its start (a continuation run's end_time is counted from t = 0).
+    const double n_out =
+        std::ceil((model.solver.end_time - t_begin) / model.solver.output_interval - 1e-9) + 1;
     every_ = std::max<long>(1, static_cast<long>(std::ceil(n_out / std::max(1, spec.series_points))));
     rec_.series_values.assign(series_index_.size(), {});
   }
@@ -928,6 +932,9 @@ class Keep : public Observer {
   long every_ = 1, count_ = 0;
 };
 
+/// The most driver periods a transient may span (AnalysisOptions::discard_periods' range).
+constexpr double kMaxDiscardPeriods = 1e6;
+
 /// The end of a run's transient, the run starting at t_begin: `time` seconds when the study gives
 /// it, else `periods` periods of the driver (none without one). Throws std::invalid_argument
 /// when it is not shorter than the run.
@@ -947,6 +954,14 @@ double transient_end(const StudySpec& spec, const Model& model, const Driver* dr
   if (t_transient >= model.solver.end_time)
     throw std::invalid_argument(fmt::format("the transient ({:.6g} s) is not shorter than the run ({:.6g} s)",
                                             t_transient - t_begin, model.solver.end_time - t_begin));
+  // Sections and the verdict start at the first whole period after a transient in seconds; the
+  // analyses count at most 1e6 periods (the run's own option said "--discard" here, and past
+  // 2^31 periods the count overflowed).
+  if (spec.discard_time >= 0 && period > 0 && !(spec.discard_time / period <= kMaxDiscardPeriods))
+    throw std::invalid_argument(fmt::format(
+        "the transient ({:.6g} s) is {:.6g} periods of the driver at this speed; at most {:.0f} "
+        "(sections and the verdict start at the first period after it): give a shorter transient",
+        spec.discard_time, spec.discard_time / period, kMaxDiscardPeriods));
   return t_transient;
 }
 
@@ -1044,7 +1059,7 @@ RunRecord run_study_point(const StudySpec& spec, const StudyRun& run, const std:
     ao.exact_channels = metric_channel_names(model, spec);
     ao.frames = 2;
     Workspace ws(model);
-    Keep keep(model, ws, spec, rec, t_transient);
+    Keep keep(model, ws, spec, rec, t_begin, t_transient);
     const RunAnalysis ra = analyze_run(model, ao, &keep);
     const RunResult& res = ra.result;
     rec.t_reached = res.status.t;
