@@ -627,6 +627,12 @@ void check_non_decreasing(const std::string& function, const std::string& name,
           (i > 0 ? " after " + name + "[" + std::to_string(i - 1) + "] = " + number(t[i - 1]) : ""));
 }
 
+/// `s` as Python text: UTF-8, any other byte as \xNN.
+py::str text(const std::string& s) {
+  return py::reinterpret_steal<py::str>(
+      PyUnicode_DecodeUTF8(s.data(), static_cast<Py_ssize_t>(s.size()), "backslashreplace"));
+}
+
 }  // namespace
 
 PYBIND11_MODULE(_lash, m) {
@@ -637,19 +643,35 @@ PYBIND11_MODULE(_lash, m) {
   // lash::ModelError → lash.ModelError(ValueError), with every problem as `diagnostics`.
   static py::exception<lash::ModelError> model_error(m, "ModelError", PyExc_ValueError);
   static py::exception<lash::IoError> io_error(m, "IoError", PyExc_OSError);
+  // Messages name files, and a file name need not be UTF-8: its other bytes show as \xNN (as
+  // lash.Model's messages show them), where decoding as UTF-8 raised UnicodeDecodeError
+  // instead of the error.
   py::register_exception_translator([](std::exception_ptr p) {
+    const auto raise = [](PyObject* type, const std::string& what) {
+      PyErr_SetObject(type, text(what).ptr());
+    };
     try {
       if (p) std::rethrow_exception(p);
     } catch (const lash::ModelError& e) {
       py::list diagnostics;
       for (const auto& d : e.diagnostics())
-        diagnostics.append(py::make_tuple(d.file, d.line, d.column, d.element, d.message));
+        diagnostics.append(py::make_tuple(text(d.file), d.line, d.column, text(d.element), text(d.message)));
       py::object type = py::reinterpret_borrow<py::object>(model_error.ptr());
-      py::object instance = type(py::str(e.what()));
+      py::object instance = type(text(e.what()));
       instance.attr("diagnostics") = diagnostics;
       PyErr_SetObject(model_error.ptr(), instance.ptr());
     } catch (const lash::IoError& e) {
-      io_error(e.what());
+      raise(io_error.ptr(), e.what());
+    } catch (const py::builtin_exception&) {  // py::type_error, ...: pybind11's translator
+      throw;
+    } catch (const std::invalid_argument& e) {  // pybind11's own mapping, with the decoding above
+      raise(PyExc_ValueError, e.what());
+    } catch (const std::range_error& e) {
+      raise(PyExc_ValueError, e.what());
+    } catch (const std::overflow_error& e) {
+      raise(PyExc_OverflowError, e.what());
+    } catch (const std::runtime_error& e) {
+      raise(PyExc_RuntimeError, e.what());
     }
   });
 
@@ -721,7 +743,10 @@ PYBIND11_MODULE(_lash, m) {
             return lash::run_study_threads(folder, spec, jobs, &interrupt, nullptr);
           };
           const std::string error = run_interruptible(work, interrupt);
-          if (!error.empty()) throw lash::IoError(output + "/study.db", error);
+          if (!error.empty()) {  // (the database's error names it already)
+            const std::string db = output + "/study.db";
+            throw lash::IoError(db, error.rfind(db + ": ", 0) == 0 ? error.substr(db.size() + 2) : error);
+          }
           py::dict d;
           d["total"] = folder.runs().size();
           d["already"] = already;
@@ -743,11 +768,11 @@ PYBIND11_MODULE(_lash, m) {
             py::dict row;
             row["run"] = r.run;
             for (size_t p = 0; p < t.parameters.size(); ++p)
-              row[py::str(t.parameters[p])] = std::isnan(r.numbers[p]) ? py::object(py::str(r.values[p]))
+              row[py::str(t.parameters[p])] = std::isnan(r.numbers[p]) ? py::object(text(r.values[p]))
                                                                         : py::object(py::float_(r.numbers[p]));
             row["status"] = r.status;
             row["verdict"] = r.verdict;
-            row["message"] = r.message;
+            row["message"] = text(r.message);  // may name a file whose name is not UTF-8
             row["wall_seconds"] = r.wall_seconds;
             for (const auto& [name, v] : r.metrics) row[py::str(name)] = v;
             rows.append(row);

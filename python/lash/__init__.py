@@ -798,7 +798,9 @@ class Study:
     """
 
     def __init__(self, db_path: str | os.PathLike) -> None:
-        data = _lash.read_study(os.fsdecode(db_path))
+        # Bytes to the engine: a path that is not UTF-8 (surrogate escapes in a str) is no
+        # str pybind11 can pass on.
+        data = _lash.read_study(os.fsencode(db_path))
         self.path = os.fsdecode(db_path)
         self.name: str = data["name"]
         self.total_runs: int = data["total_runs"]
@@ -864,7 +866,7 @@ def sweep(study: str | os.PathLike, output: str | os.PathLike, *, jobs: Optional
     with open(study, "rb"):  # FileNotFoundError, IsADirectoryError, ... with the path
         pass
     try:
-        _lash.sweep(study, output, int(jobs), resume)
+        _lash.sweep(os.fsencode(study), os.fsencode(output), int(jobs), resume)
     except ValueError as e:
         if "add --resume" not in str(e):  # the CLI's option, resume=True here
             raise

@@ -552,6 +552,27 @@ def test_sweep_from_python_equals_the_cli(tmp_path):
         lash.sweep(bad, tmp_path / "bad")
 
 
+def test_sweep_takes_paths_that_are_not_utf8(tmp_path):
+    """Bytes paths that are not UTF-8 (Latin-1 é, 0xE9) reach the engine as bytes (pybind11 could
+    not pass the surrogate-escaped str: TypeError), and a message naming one shows its byte as
+    \\xE9 (it raised UnicodeDecodeError instead of the ModelError)."""
+    base = os.fsencode(tmp_path)
+    study = base + b"/st_\xe9.yaml"
+    with open(study, "w") as f:
+        f.write(f"study: latin1\nmodel: {FLORES}\nset: {{solver.end_time: 0.03}}\n"
+                "transient: {periods: 1}\nparameters:\n  joints.rod_slider.clearance: {values: [2.0e-4, -1.0e-4]}\n")
+    s = lash.sweep(study, base + b"/out_\xff", jobs=1)
+    assert list(s["status"]) == ["completed", "error"]
+    assert list(lash.read_study(base + b"/out_\xff")["status"]) == ["completed", "error"]
+    assert "st_\\xe9.yaml:6:3: joint 'rod_slider': clearance must be >= 0" in s.rows[1]["message"]
+    bad = base + b"/bad_\xe9.yaml"
+    with open(bad, "w") as f:
+        f.write("study: bad\nmodel: nothere.yaml\nparameters:\n  a: {values: [1]}\n")
+    with pytest.raises(lash.ModelError, match=r"bad_\\xe9.yaml:2:8: model: .*nothere.yaml: cannot open") as e:
+        lash.sweep(bad, base + b"/bad", jobs=1)
+    assert e.value.diagnostics[0][0].endswith("bad_\\xe9.yaml")
+
+
 def python_in_child(code, timeout=60):
     """Runs `code` in a child interpreter with lash importable, its address space limited to 2 GB
     (so that reading /dev/zero whole ends in MemoryError, not in the OOM killer); returns the
