@@ -675,6 +675,33 @@ TEST(Cli, ExpressionFailingMidRunExitsOneWithASummary) {
   fs::remove_all(dir);
 }
 
+TEST(Cli, ADriverExpressionFailingMidRunIsReportedUpToTheFailure) {
+  // The report's period of an expression driver is its mean speed over the run's last half,
+  // where this one cannot be evaluated (past 0.01 s): `run --report` exited 2 with the earlier
+  // run's results deleted and none of its own, and `report` of the folder exited 1 with no
+  // report. Now: no period, the run reported up to its failure, exit 1.
+  const fs::path dir = temp_dir("driver_expr");
+  fs::create_directories(dir);
+  std::string text = lash::test::read_file(example());
+  const std::string speed = "speed_rpm: 5000";
+  ASSERT_NE(text.find(speed), std::string::npos);
+  text.replace(text.find(speed), speed.size(), "motion: \"10*time + 0*sqrt(0.01 - time)\"");
+  std::ofstream(dir / "m.yaml") << text;
+  const fs::path out = dir / "out";
+  Result r = run_lash("run " + (dir / "m.yaml").string() + " -q --report -o " + out.string());
+  EXPECT_EQ(r.code, 1) << r.out;
+  EXPECT_NE(r.out.find("driver 'crank': expression '10*time + 0*sqrt(0.01 - time)' failed at time 0.01"),
+            std::string::npos) << r.out;
+  ASSERT_TRUE(fs::exists(out / "summary.json")) << r.out;
+  EXPECT_EQ(read_summary(out)["status"]["outcome"], "failed");
+  EXPECT_TRUE(fs::exists(out / "report.html"));
+  fs::remove(out / "report.html");
+  r = run_lash("report " + out.string());
+  EXPECT_EQ(r.code, 1) << r.out;
+  EXPECT_TRUE(fs::exists(out / "report.html")) << r.out;
+  fs::remove_all(dir);
+}
+
 TEST(Cli, AFailureWithoutClearanceJointsStillGivesTheState) {
   // A force that grows without bound at t = 2 ms: the integrator gives up there. Without a
   // clearance joint to describe, the message names the body with the largest acceleration

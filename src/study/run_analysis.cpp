@@ -585,7 +585,13 @@ double mean_driver_speed(const Model& model, const Driver& d, double t0, double 
   for (int k = 0; k <= kSamples; ++k) {
     const double t = t0 + (t1 - t0) * k / kSamples;
     double f, fd, fdd;
-    driver_motion(model, ws, di, t, y.data(), f, fd, fdd);
+    try {
+      driver_motion(model, ws, di, t, y.data(), f, fd, fdd);
+    } catch (const std::exception&) {
+      // An expression that cannot be evaluated there (sqrt(0.01 − time) past 0.01 s, where the
+      // run stops with that error): no period, rather than no run and no report.
+      return std::nan("");
+    }
     if (!std::isfinite(fd)) return std::nan("");
     sum += (k == 0 || k == kSamples) ? 0.5 * fd : fd;
     lo = std::min(lo, fd);
