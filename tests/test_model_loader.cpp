@@ -265,6 +265,35 @@ TEST(Overrides, ChangeValuesAndSwitchJointsToClearance) {
   EXPECT_EQ(d[0].str(), "--set joints.pin.material.youngs_modulus: no 'joints.pin.material' in the model");
 }
 
+TEST(Overrides, AValueReachedThroughAnAliasChangesThereOnly) {
+  // An anchor's node and its aliases are one node: written in place, --set b.position moved
+  // body a too, and a bearing material shared through *steel changed the journal's and the
+  // defaults' as well.
+  const std::string text =
+      "name: m\n"
+      "bodies:\n"
+      "  a: &body {mass: 1, inertia: 1, position: [0, 0]}\n"
+      "  b: *body\n"
+      "  c: {mass: &m 2, inertia: *m, position: [3, 0]}\n"
+      "solver: {end_time: 0.01}\n";
+  const auto lm = load_model_text(text, "m.yaml", {"bodies.b.position=[1, 0]", "bodies.c.mass=5"});
+  ASSERT_EQ(lm.model.bodies.size(), 3u);
+  EXPECT_EQ(lm.model.bodies[0].r0, Vec2(0, 0));
+  EXPECT_EQ(lm.model.bodies[1].r0, Vec2(1, 0));
+  EXPECT_EQ(lm.model.bodies[1].mass, 1.0);
+  EXPECT_EQ(lm.model.bodies[2].mass, 5.0);
+  EXPECT_EQ(lm.model.bodies[2].inertia, 2.0);  // the alias of the mass it was
+  // The model as run shows each body with its own values, in the file's order.
+  EXPECT_EQ(load_model_text(lm.resolved_yaml, "again.yaml").resolved_yaml, lm.resolved_yaml);
+  const auto again = load_model_text(lm.resolved_yaml, "again.yaml").model;
+  EXPECT_EQ(again.bodies[0].name, "a");
+  EXPECT_EQ(again.bodies[0].r0, Vec2(0, 0));
+  EXPECT_EQ(again.bodies[1].r0, Vec2(1, 0));
+  EXPECT_EQ(again.bodies[2].inertia, 2.0);
+  EXPECT_NE(lm.resolved_yaml.find("b: {mass: 1, inertia: 1, position: [1, 0]}"), std::string::npos)
+      << lm.resolved_yaml;
+}
+
 TEST(Overrides, SectionsOfDefaultsAreMadeWhereTheFileHasNone) {
   // A model that states no solver settings (all but end_time have defaults) takes
   // --set solver.end_time (Python's t_end): it was "no 'solver' in the model". The same for

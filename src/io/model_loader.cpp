@@ -1309,6 +1309,42 @@ YAML::Node override_value(const std::string& value) {
 /// Applies "a.b.c=value": the parents must exist; the last key may be new. A section made of
 /// settings with defaults (`solver`, `clearance_defaults`) is made where the file has none, so
 /// `--set solver.end_time=1` works on a model that states no solver settings.
+/// Whether a node on the path `keys` from `root` (each map on it and the value at its end) is
+/// also reached from another place in the tree: an anchor's node and its aliases are one node
+/// (yaml-cpp), so writing through one path writes through all. Collections are walked once each
+/// (an alias of one is not walked again, so self-references and exponential aliases cost nothing).
+bool path_is_shared(const YAML::Node& root, const std::vector<std::string>& keys) {
+  std::vector<YAML::Node> on_path;
+  YAML::Node n = root;
+  for (const auto& k : keys) {
+    if (!n.IsMap() || !n[k].IsDefined()) break;
+    n.reset(n[k]);
+    on_path.push_back(n);
+  }
+  std::vector<int> seen(on_path.size(), 0);
+  std::vector<YAML::Node> todo{root}, walked;  // walked: collections without a place in the text
+  std::set<std::size_t> walked_at;              // those with one, by their offset in the text
+  while (!todo.empty()) {
+    const YAML::Node c = todo.back();
+    todo.pop_back();
+    if (!c.IsMap() && !c.IsSequence()) continue;
+    if (c.Mark().pos >= 0) {
+      if (!walked_at.insert(static_cast<std::size_t>(c.Mark().pos)).second) continue;
+    } else if (std::any_of(walked.begin(), walked.end(), [&](const YAML::Node& w) { return w.is(c); })) {
+      continue;
+    } else {
+      walked.push_back(c);
+    }
+    for (auto it = c.begin(); it != c.end(); ++it) {
+      const YAML::Node child = c.IsMap() ? YAML::Node(it->second) : YAML::Node(*it);
+      for (size_t i = 0; i < on_path.size(); ++i)
+        if (child.is(on_path[i]) && ++seen[i] > 1) return true;
+      todo.push_back(child);
+    }
+  }
+  return false;
+}
+
 void apply_override(YAML::Node root, const std::string& spec, Reporter& r) {
   const auto eq = spec.find('=');
   if (eq == std::string::npos || eq == 0) {
@@ -1346,7 +1382,37 @@ void apply_override(YAML::Node root, const std::string& spec, Reporter& r) {
     r.list.push_back({"--set " + path, 0, 0, "", "'" + walked + "' is not a map"});
     return;
   }
-  node[keys.back()] = override_value(value);
+  if (!path_is_shared(root, keys)) {
+    node[keys.back()] = override_value(value);
+    return;
+  }
+  // A map on the path, or the value, is an alias's too (`bearing_material: *steel`): written in
+  // place, the value would change wherever the anchor is used. The maps on the path are copied
+  // instead, and the copies replace the path from the root down: in order, their keys and
+  // scalar values new nodes (model_resolved.yaml would show shared ones as aliases of each
+  // other), their collections the originals' (aliases off the path stay aliases).
+  std::vector<YAML::Node> on_path{root};
+  for (size_t i = 0; i + 1 < keys.size(); ++i) on_path.push_back(on_path.back()[keys[i]]);
+  const auto fresh = [](const YAML::Node& n) {
+    if (!n.IsScalar()) return n;
+    YAML::Node copy(n.Scalar());
+    copy.SetTag(n.Tag());
+    return copy;
+  };
+  YAML::Node replacement = override_value(value);
+  for (size_t i = keys.size(); i-- > 0;) {
+    YAML::Node copy(YAML::NodeType::Map);
+    copy.SetStyle(on_path[i].Style());
+    bool placed = false;
+    for (const auto& kv : on_path[i]) {
+      const bool here = kv.first.IsScalar() && kv.first.Scalar() == keys[i];
+      copy[fresh(kv.first)] = here ? replacement : fresh(kv.second);
+      placed = placed || here;
+    }
+    if (!placed) copy[keys[i]] = replacement;
+    replacement = copy;
+  }
+  root = replacement;
 }
 
 /// Every key that appears twice in one map, with both places (yaml-cpp keeps both, and a lookup
