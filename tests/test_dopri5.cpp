@@ -282,6 +282,38 @@ TEST(Failure, AStallIsMeasuredAgainstTheRunsEnd) {
   }
 }
 
+TEST(EndTime, NoStageIsEvaluatedPastTheRunsEnd) {
+  // A model need not be defined past its end_time (a load of sqrt(1 − time) with end_time
+  // 0.9999 s): the last step overshot it and the run failed at t = 1.00005 s, losing the rows
+  // before. Now the step that would pass end_time ends on it, under both integrators, and the
+  // value there is as accurate as anywhere.
+  for (auto make : {&make_dopri5, &make_cvode_bdf}) {
+    double latest = 0.0;
+    OdeProblem p = oscillator();
+    const auto rhs = p.rhs;
+    p.rhs = [&](double t, const double* y, double* dy) {
+      latest = std::max(latest, t);
+      return rhs(t, y, dy);
+    };
+    IntegratorOptions o;
+    o.rtol = 1e-9;
+    o.atol = 1e-12;
+    o.end_time = 0.9999;
+    auto integ = make(p, o);
+    SCOPED_TRACE(integ->name());
+    integ->set_step_hook([](double, double) {});
+    Eigen::VectorXd y(2);
+    y << 1.0, 0.0;
+    integ->reset(0, y);
+    for (int k = 1; k <= 10; ++k) {
+      const Advance a = integ->advance(std::min(0.1 * k, o.end_time), y);
+      ASSERT_EQ(a.kind, Advance::reached) << a.message;
+    }
+    EXPECT_LE(latest, o.end_time);
+    EXPECT_NEAR(y[0], std::cos(o.end_time), 1e-7);
+  }
+}
+
 TEST(Failure, BdfMaxStepsCountsTheWholeRun) {
   // y' = cos(1e6 t): BDF resolves each period (6.3e-6 s) in tens of steps, about 1e7 steps a
   // second. With a budget of 2e5 steps and outputs every 1e-3 s (a few thousand steps each),

@@ -105,6 +105,8 @@ class CvodeBdf final : public Integrator {
     return ok;
   }
 
+  void set_end_time(double t) override { o_.end_time = t; }
+
   Advance advance(double t_out, Eigen::VectorXd& y) override {
     if (t_out <= t_) {
       for (int i = 0; i < p_.n; ++i) y[i] = NV_Ith_S(y_, i);
@@ -128,6 +130,11 @@ class CvodeBdf final : public Integrator {
       return {Advance::failure, t_, last_error_};
     }
     CVodeSetMaxNumSteps(mem_, o_.max_steps - used);
+    // No step past the run's end (a model need not be defined there): CVODE's stop time, set
+    // again at each call (a restart or reaching it clears it).
+    if (double t_now = t_; o_.end_time > 0 && CVodeGetCurrentTime(mem_, &t_now) == CV_SUCCESS &&
+                           t_now < o_.end_time)
+      CVodeSetStopTime(mem_, o_.end_time);
     const int flag =
         hook_ || stop_ || p_.project || p_.halt ? one_step_to(t_out, t_ret)
                                      : CVode(mem_, t_out, y_, &t_ret, CV_NORMAL);

@@ -64,6 +64,8 @@ class Dopri5 final : public Integrator {
     return true;
   }
 
+  void set_end_time(double t) override { o_.end_time = t; }
+
   Advance advance(double t_out, Eigen::VectorXd& y) override {
     for (;;) {
       // Serve the request from the last accepted step where it lies inside.
@@ -147,6 +149,11 @@ class Dopri5 final : public Integrator {
         return "maximum number of steps (" + std::to_string(o_.max_steps) + ") reached";
       double h = h_;
       if (o_.max_step > 0) h = std::min(h, o_.max_step);
+      // No stage past the run's end: a model need not be defined there (a load of
+      // sqrt(1 − time) with end_time 1 s failed at t = 1.00005 s and lost the rows before it).
+      // A step that would end within 1 % of a step of it ends on it.
+      const bool to_end = o_.end_time > t_ && t_ + 1.01 * h >= o_.end_time;
+      if (to_end) h = o_.end_time - t_;
       if (h < 16.0 * std::numeric_limits<double>::epsilon() * std::max(1.0, std::abs(t_)))
       {
         char msg[96];
@@ -187,7 +194,7 @@ class Dopri5 final : public Integrator {
       dense_coefficients(k1_, h);
       t_old_ = t_;
       h_step_ = h;
-      t_ = t_ + h;
+      t_ = to_end ? o_.end_time : t_ + h;
       y_ = ynew_;
       k1_prev_ = k1_;
       k1_ = k7_;

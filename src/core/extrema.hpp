@@ -54,8 +54,7 @@ class ChannelExtrema {
   /// Only values at times in [from, to] count (default: up to the model's end_time; `to` is
   /// never later). A step across an end samples the end itself and refines inside the window
   /// only, so the extrema over the window are as exact as over a whole run. (The integrator's
-  /// last step usually passes end_time, and the outputs are interpolated back to it: what lies
-  /// past it is not part of the run.)
+  /// steps end on end_time, never past it; a window's end inside a step is cut as above.)
   void set_window(double from, double to) { from_ = from, to_ = std::min(to, end_); }
   /// The relative resolution below which a turning point is not searched (default: the model's
   /// rtol; 0 searches every one that may beat the extremum found so far).

@@ -131,6 +131,8 @@ class Integrator {
   /// Integrates toward t_out; y receives the state at the returned time. An event returns the
   /// first point found just past the crossing (g_k > 0 there).
   virtual Advance advance(double t_out, Eigen::VectorXd& y) = 0;
+  /// Moves the time no step passes (IntegratorOptions::end_time; 0: none).
+  virtual void set_end_time(double t) = 0;
   virtual IntegratorStats stats() const = 0;
   virtual const char* name() const = 0;
 

@@ -450,6 +450,8 @@ void Simulator::set_interrupt(const std::atomic<int>* flag) {
 }
 
 // A function-try-block: an expression failing mid-run (ExpressionError) is a numerical failure.
+void Simulator::set_end_time(double t) { integrator_->set_end_time(t); }
+
 bool Simulator::advance_to(double t_target, Observer* observer) try {
   hook_steps(observer);
   while (t_ < t_target) {
@@ -905,6 +907,14 @@ RunResult simulate(const Model& model, Workspace& ws, Observer& observer,
     const double t_sec = next_section();
     const bool is_section = t_sec < t_out - 1e-12 * t_out && t_sec <= s.end_time;
     const double target = is_section ? t_sec : t_out;
+    if (!options.restarts.empty()) {
+      // No step passes a restart: the run continued from a state saved there took its last
+      // step to it (a run's steps end on end_time), and so does this one.
+      double stop = s.end_time;
+      for (double r : options.restarts)
+        if (r > sim.time() && r < stop) stop = r;
+      sim.set_end_time(stop);
+    }
     if (!sim.advance_to(target, &observer)) {
       result.status = sim.status();
       y = sim.state();

@@ -151,6 +151,9 @@ class Simulator {
   /// Returns false on a numerical failure, or when the interrupt flag was raised (outcome
   /// interrupted, at the last accepted step); status() says what happened.
   bool advance_to(double t_target, Observer* observer);
+  /// The time no integrator step passes (the model's end_time at the start): a model need not
+  /// be defined past it, and a run continued from there repeats this one's last steps.
+  void set_end_time(double t);
   /// A flag (a signal number, 0: none) checked before every integrator step.
   void set_interrupt(const std::atomic<int>* flag);
   double time() const { return t_; }
