@@ -1032,6 +1032,13 @@ TEST(Cli, ASignalStopsTheRunAndKeepsSummaryAndState) {
     const auto state = nlohmann::json::parse(std::ifstream(dir / "final_state.json"));
     EXPECT_GT(state["t"].get<double>(), 0.0);
     EXPECT_LT(state["t"].get<double>(), 5.0);
+    // No extremum after the state the run stopped in (stopped at an output, the last step
+    // had passed it: its extrema were counted to the step's end).
+    for (const auto& [name, c] : summary["channels"].items())
+      if (!c["t_max"].is_null()) {
+        EXPECT_LE(c["t_max"].get<double>(), summary["status"]["time"].get<double>()) << name;
+        EXPECT_LE(c["t_min"].get<double>(), summary["status"]["time"].get<double>()) << name;
+      }
     expect_whole_rows(dir / "timeseries.csv");
     expect_whole_rows(dir / "events.csv");
     EXPECT_EQ(summary["integrator"]["outputs"].get<long>() + 1,
@@ -1092,6 +1099,17 @@ TEST(Cli, AWriteErrorStopsTheRunWithExitThreeAndWholeRows) {
     said << "(up to t = " << t_last << " s) are whole";
     EXPECT_NE(r.out.find(said.str()), std::string::npos) << r.out;
   }
+  // The extrema are over the run up to where it stopped (the output it could not write): the
+  // step that had passed that output counted up to its end, 5e-6 s later.
+  const double t_stop = summary["status"]["time"].get<double>();
+  int channels = 0;
+  for (const auto& [name, c] : summary["channels"].items()) {
+    if (c["t_max"].is_null()) continue;
+    ++channels;
+    EXPECT_LE(c["t_max"].get<double>(), t_stop) << name;
+    EXPECT_LE(c["t_min"].get<double>(), t_stop) << name;
+  }
+  EXPECT_GT(channels, 40);
   // `lash analyze` refuses the folder and says why, without suggesting --from (a run stopped
   // by a write error leaves no final state).
   const Result an = run_lash("analyze " + dir.string() + " --no-lyapunov");

@@ -59,6 +59,10 @@ ChannelExtrema::ChannelExtrema(const Model& model, std::vector<int> tracked)
 
 void ChannelExtrema::sample(double t, const double* values) {
   if (t < from_ || t > to_) return;
+  if (!in_step_ && t <= step_end_) {  // an output inside the last step: end_at counts it again
+    since_t_.push_back(t);
+    since_values_.insert(since_values_.end(), values, values + ext_.size());
+  }
   for (const int i : tracked_) {
     const double v = values[i];
     ChannelExtremum& e = ext_[i];
@@ -85,8 +89,29 @@ bool ChannelExtrema::probe_values(StepProbe& probe, double t, std::vector<double
   return true;
 }
 
+void ChannelExtrema::end_at(double t) {
+  if (!(t < step_end_)) return;
+  ext_ = before_step_;
+  step_end_ = -std::numeric_limits<double>::infinity();  // sample() records nothing now
+  const std::vector<double> times = std::move(since_t_), values = std::move(since_values_);
+  since_t_.clear();
+  since_values_.clear();
+  for (size_t k = 0; k < times.size(); ++k)
+    if (times[k] <= t) sample(times[k], values.data() + k * ext_.size());
+}
+
 void ChannelExtrema::step(double t0, double t1, const Eigen::VectorXd& y1, const Workspace& ws1,
                           StepProbe& probe) {
+  // What end_at needs to forget this step: the extrema before it.
+  before_step_ = ext_;
+  step_end_ = t1;
+  since_t_.clear();
+  since_values_.clear();
+  in_step_ = true;
+  struct Done {
+    bool& flag;
+    ~Done() { flag = false; }
+  } done{in_step_};
   const double h = t1 - t0;
   if (t1 < from_ || t0 > to_) {  // outside the window: nothing to track
     have_slope_ = false;

@@ -69,6 +69,11 @@ class ChannelExtrema {
             StepProbe& probe);
   /// The right-hand side may jump here (an event): the next step takes its start slope anew.
   void restart() { have_slope_ = false; }
+  /// The run stopped at t, before the end of the last step it tracked (an output it could not
+  /// write, an interruption at an output: the step had passed it): what that step found is
+  /// forgotten and the samples since, up to t, count again; the extrema are then over the run
+  /// up to t, less any turning point inside the last step before t (not searched again).
+  void end_at(double t);
 
   const std::vector<ChannelExtremum>& extrema() const { return ext_; }
   long refinements() const { return refinements_; }      ///< turning-point searches run
@@ -94,6 +99,12 @@ class ChannelExtrema {
   double to_;
   bool have_slope_ = false;
   long refinements_ = 0, evaluations_ = 0;
+  /// For end_at: the extrema before the last step, that step's end, and the samples since
+  /// (times, and every channel's value per sample); in_step_ while a step probes.
+  std::vector<ChannelExtremum> before_step_;
+  double step_end_ = -std::numeric_limits<double>::infinity();
+  std::vector<double> since_t_, since_values_;
+  bool in_step_ = false;
 };
 
 }  // namespace lash

@@ -207,6 +207,9 @@ RunStatus ResultsWriter::finish(const RunResult& r) {
   using nlohmann::json;
   close_files(r);
   RunStatus status = r.status;
+  // A run stopped at an output its last step had passed (a write error, an interruption): the
+  // extrema are over the run up to where it stopped, as the files and final_state.json are.
+  extrema_.end_at(r.status.t);
   // Rows of the time series on disk (the CSV's header is not one), and the last one's time.
   const long long series_rows = h5_ ? h5_->rows_written() : std::max(0LL, ts_.rows_written() - 1);
   auto last_time_on_disk = [&] {
