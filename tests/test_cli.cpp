@@ -1163,6 +1163,28 @@ TEST(Cli, AModelFileAmongTheRunsOwnFilesIsNotReplaced) {
   fs::remove_all(dir);
 }
 
+TEST(Cli, AGivenPoseWithAJournalThroughItsBearingIsRefusedAtTheJoint) {
+  // initial_state: given with the slider 11 mm off: the journal lies 10.5 mm into its bearing's
+  // wall, deeper than its radius (9.5 mm). `check` said ok and `run` failed at t = 0 blaming a
+  // soft contact (exit 1); now both refuse it at the joint (exit 2), as a continued state is.
+  const fs::path dir = temp_dir("given_through");
+  fs::create_directories(dir);
+  std::string text = lash::test::read_file(example());
+  const std::string pose = "position: [0.17, 0]";
+  ASSERT_NE(text.find(pose), std::string::npos);
+  text.replace(text.find(pose), pose.size(), "position: [0.181, 0]");
+  std::ofstream(dir / "m.yaml") << text;
+  for (const std::string& args : {std::string(), " -q -o " + (dir / "out").string()}) {
+    const Result r = run_lash((args.empty() ? "check " : "run ") + (dir / "m.yaml").string() + args +
+                              " --set solver.initial_state=given");
+    EXPECT_EQ(r.code, 2) << r.out;
+    EXPECT_NE(r.out.find("joint 'rod_slider': at the start the journal lies 0.0105 m into its "
+                         "bearing's wall, as deep as its own radius 0.0095 m or deeper"),
+              std::string::npos) << r.out;
+  }
+  fs::remove_all(dir);
+}
+
 TEST(Cli, AModelRefusedAtAssemblyIsReportedAtTheElement) {
   // A second driver of the crank, written in the file: refused when the model is assembled,
   // which had no line ("m.yaml: driver 'b': ..."); now at the driver, by check and run alike.

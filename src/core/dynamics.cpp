@@ -1069,6 +1069,24 @@ Eigen::VectorXd initial_state(const Model& model, Workspace& ws) {
       << "the poses and their units";
     ws.warnings.push_back(s.str());
   }
+  // A journal placed through its bearing's wall by its own radius or more (a pose given for
+  // another clearance or geometry, initial_state: given): the contact's normal points the wrong
+  // way there, and the run failed at once saying "journal driven through its bearing ... the
+  // contact is too soft", as if the load were to blame. Refused as a continued state is.
+  for (int c = 0; c < ws.nc; ++c) {
+    const Joint& j = model.joints[ws.clearance_joints[c]];
+    double delta = 0.0, delta_dot = 0.0;
+    clearance_gap(model, ws, c, y.data(), delta, delta_dot);
+    if (delta >= j.clearance->journal_radius) {
+      std::ostringstream s;
+      s.precision(6);
+      s << "joint '" << j.name << "': at the start the journal lies " << delta
+        << " m into its bearing's wall, as deep as its own radius " << j.clearance->journal_radius
+        << " m or deeper (clearance " << j.clearance->clearance
+        << " m); check the poses of the bodies it joins";
+      throw std::runtime_error(s.str());
+    }
+  }
   return y;
 }
 
