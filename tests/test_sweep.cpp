@@ -200,6 +200,14 @@ TEST(StudyFile, ALevelListedTwiceIsRefusedWhereItIs) {
             std::string::npos);
   EXPECT_NE(problem("  solver.integrator: {values: [bdf, dopri5, bdf]}\n").find("level bdf is listed twice"),
             std::string::npos);
+  // Lists and maps compare entry by entry, numbers as numbers.
+  EXPECT_NE(problem("  gravity: {values: [[0, -9.81], [0.0, -9.81]]}\n")
+                .find("parameter 'gravity': level [0.0, -9.81] is listed twice (levels 1 and 2)"),
+            std::string::npos);
+  EXPECT_EQ(problem("  gravity: {values: [[0, -9.81], [0, -9.8]]}\n"), "accepted");
+  EXPECT_NE(problem("  joints.rod_slider.friction: {values: [{law: none}, {law: none}]}\n")
+                .find("is listed twice"),
+            std::string::npos);
   // zip: a parameter may repeat a level; a whole row may not.
   EXPECT_EQ(problem("  drivers.crank.speed_rpm: {values: [4000, 5000, 4000]}\n"
                     "  joints.rod_slider.clearance: {values: [1.0e-4, 2.0e-4, 3.0e-4]}\n", "combine: zip\n"),
@@ -211,6 +219,17 @@ TEST(StudyFile, ALevelListedTwiceIsRefusedWhereItIs) {
   // A continuation chain may come back to a level: from another state, another run.
   EXPECT_EQ(problem("  drivers.crank.speed_rpm: {values: [8000, 2000, 8000]}\n", "continuation: up\n"),
             "accepted");
+}
+
+TEST(StudyFile, AStudysModelOfTheWrongKindAndARefusedMaxAreSaidOnce) {
+  // `model: [m.yaml]` was "'model' is missing" at 1:1; a max of .inf added "sampling: no
+  // parameter has min/max to draw", the parameter having been dropped with its error.
+  EXPECT_EQ(text_problems("study: s\nmodel: [m.yaml]\nparameters: {a: {values: [1]}}\n"),
+            "s.yaml:2:8: model: expected the base model file's name (relative to this file), got a list\n");
+  EXPECT_EQ(text_problems("study: s\nmodel: " + example() +
+                          "\nparameters: {drivers.crank.speed_rpm: {min: 3000, max: .inf}}\n"
+                          "sampling: {method: random, count: 3}\n"),
+            "s.yaml:3:56: parameter 'drivers.crank.speed_rpm': max: expected a finite number, got '.inf'\n");
 }
 
 TEST(StudyFile, LatinHypercubeFillsEveryStratumOnceAndIsReproducible) {

@@ -162,6 +162,37 @@ Diagnostics study_diagnostics(const std::vector<Diagnostic>& in, const StudySpec
 
 constexpr int kMaxRuns = 1000000;
 
+/// Whether two levels written in a study are one value: numbers as numbers (5000 and 5.0e3),
+/// other scalars as text, lists and maps entry by entry ([0, -9.81] and [0.0, -9.81]).
+bool same_level(const YAML::Node& a, const YAML::Node& b) {
+  if (a.IsScalar() && b.IsScalar()) {
+    const auto number = [](const std::string& t, double& x) {
+      char* end = nullptr;
+      x = std::strtod(t.c_str(), &end);
+      return !t.empty() && *end == '\0';
+    };
+    double x = 0, y = 0;
+    if (number(a.Scalar(), x) && number(b.Scalar(), y)) return x == y;
+    return a.Scalar() == b.Scalar();
+  }
+  if (a.IsSequence() && b.IsSequence()) {
+    if (a.size() != b.size()) return false;
+    for (size_t i = 0; i < a.size(); ++i)
+      if (!same_level(a[i], b[i])) return false;
+    return true;
+  }
+  if (a.IsMap() && b.IsMap()) {
+    if (a.size() != b.size()) return false;
+    for (const auto& kv : a) {
+      if (!kv.first.IsScalar()) return false;
+      const YAML::Node other = b[kv.first.Scalar()];
+      if (!other || !same_level(kv.second, other)) return false;
+    }
+    return true;
+  }
+  return a.IsNull() && b.IsNull();
+}
+
 void read_parameter(Reader& r, const YAML::Node& key, const YAML::Node& v, StudySpec& spec,
                     const std::function<std::string(const std::string&)>& load_model) {
   StudyParameter p;
@@ -244,8 +275,13 @@ void read_parameter(Reader& r, const YAML::Node& key, const YAML::Node& v, Study
       r.error(v, where + ": a sampled parameter needs min and max");
       return;
     }
-    if (!r.number(v["min"], where + ": min", p.min) || !r.number(v["max"], where + ": max", p.max))
+    p.sampled = true;
+    if (!r.number(v["min"], where + ": min", p.min) || !r.number(v["max"], where + ": max", p.max)) {
+      // Still a drawn parameter (the study is refused): `sampling:` is not then said to have
+      // nothing to draw.
+      spec.parameters.push_back(std::move(p));
       return;
+    }
     if (!(p.min < p.max)) r.error(v, where + ": min must be less than max");
     if (p.log && p.min <= 0) r.error(v, where + ": a logarithmic range needs min > 0");
     p.sampled = true;
@@ -340,8 +376,12 @@ StudySpec load_study_text(const std::string& text, const std::string& file,
   if (const YAML::Node n = root["study"]; n && !(n.IsScalar() && !n.Scalar().empty()))
     r.error(n, std::string("study: expected a name (text), got ") +
                    (n.IsSequence() ? "a list" : n.IsMap() ? "a map" : "nothing"));
-  if (!root["model"] || !root["model"].IsScalar()) {
-    r.error(root, "study: 'model' (the base model file, relative to this file) is missing");
+  if (const YAML::Node m = root["model"]; !m || !m.IsScalar() || m.Scalar().empty()) {
+    if (m && !m.IsNull())
+      r.error(m, std::string("model: expected the base model file's name (relative to this file), got ") +
+                     (m.IsSequence() ? "a list" : m.IsMap() ? "a map" : "nothing"));
+    else
+      r.error(m ? m : root, "study: 'model' (the base model file, relative to this file) is missing");
     throw ModelError(r.list);
   }
   spec.model = (std::filesystem::path(file).parent_path() / root["model"].Scalar()).lexically_normal().string();
@@ -541,15 +581,19 @@ StudySpec load_study_text(const std::string& text, const std::string& file,
   // (it pairs with different levels of the others): there a whole row of levels must not repeat.
   // A continuation chain may come back to a level (8000, 2000, 8000): from another state.
   if (spec.continuation.empty()) {
-    const auto same = [&](const StudyParameter& p, size_t a, size_t b) {
-      return std::isnan(p.numbers[a]) || std::isnan(p.numbers[b]) ? p.values[a] == p.values[b]
-                                                                   : p.numbers[a] == p.numbers[b];
+    const auto listed = [&](const StudyParameter& p) {
+      const YAML::Node v = params[p.name];
+      return v && v.IsMap() && v["values"] && v["values"].IsSequence() && v["values"].size() == p.values.size();
     };
     const auto node_of = [&](const StudyParameter& p, size_t k) -> YAML::Node {
+      if (listed(p)) return params[p.name]["values"][k];
       const YAML::Node v = params[p.name];
-      if (v && v.IsMap() && v["values"] && v["values"].IsSequence() && k < v["values"].size())
-        return v["values"][k];
       return v ? v : params;
+    };
+    const auto same = [&](const StudyParameter& p, size_t a, size_t b) {
+      if (listed(p)) return same_level(node_of(p, a), node_of(p, b));  // lists and maps too
+      return std::isnan(p.numbers[a]) || std::isnan(p.numbers[b]) ? p.values[a] == p.values[b]
+                                                                   : p.numbers[a] == p.numbers[b];
     };
     const bool zip = spec.combine == "zip" && !any_sampled;
     const size_t n_levels = spec.parameters.empty() ? 0 : spec.parameters.front().values.size();
@@ -577,7 +621,7 @@ StudySpec load_study_text(const std::string& text, const std::string& file,
         };
         if (const auto [j, k] = twice(); k > 0)
           r.error(node_of(p, k), "parameter '" + p.name + "': level " + p.values[k] +
-                                     (node_of(p, k).IsScalar() ? " is listed twice" : " comes twice from the range") +
+                                     (listed(p) ? " is listed twice" : " comes twice from the range") +
                                      " (levels " + std::to_string(j + 1) + " and " + std::to_string(k + 1) +
                                      "); its runs would be made twice");
       }
