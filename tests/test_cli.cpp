@@ -1,5 +1,6 @@
 // The lash command as a user runs it: exit codes, messages, output files.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -1160,6 +1161,35 @@ TEST(Cli, AModelFileAmongTheRunsOwnFilesIsNotReplaced) {
                              " --set solver.end_time=0.001");
   EXPECT_EQ(ok.code, 0) << ok.out;
   EXPECT_EQ(lash::test::read_file((dir / "model.yaml").string()), text);
+  fs::remove_all(dir);
+}
+
+TEST(Cli, AFolderWhoseCsvFilesGotWindowsLineEndsIsStillAnalysed) {
+  // Saved again by an editor with CR LF: "events.csv:3: velocity '-3.91123009' is not a finite
+  // number", the CR invisible in the message. Read as the same rows now.
+  const fs::path dir = temp_dir("crlf");
+  Result r = run_lash("run " + example() + " -q -o " + dir.string() + " --set solver.end_time=0.006");
+  ASSERT_EQ(r.code, 0) << r.out;
+  for (const char* name : {"timeseries.csv", "events.csv"}) {
+    std::string text = lash::test::read_file((dir / name).string()), crlf;
+    for (const char c : text) crlf += c == '\n' ? std::string("\r\n") : std::string(1, c);
+    std::ofstream(dir / name, std::ios::binary) << crlf;
+  }
+  r = run_lash("analyze " + dir.string() + " --no-lyapunov");
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("wrote " + (dir / "analysis.json").string()), std::string::npos) << r.out;
+  fs::remove_all(dir);
+}
+
+TEST(Cli, ANamedPipeInTheOutputFolderIsNamedAsOne) {
+  // It said "events.csv: not a file that lash did not write is in the way".
+  const fs::path dir = temp_dir("fifo");
+  fs::create_directories(dir);
+  ASSERT_EQ(::mkfifo((dir / "events.csv").c_str(), 0644), 0);
+  const Result r = run_lash("run " + example() + " -q -o " + dir.string() + " --set solver.end_time=0.001");
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("events.csv: a named pipe that lash did not write is in the way"), std::string::npos)
+      << r.out;
   fs::remove_all(dir);
 }
 

@@ -320,6 +320,23 @@ joints:
   d = problems(text, {"solver.rtol=1e-7"});
   ASSERT_EQ(d.size(), 1u);
   EXPECT_NE(d[0].str().find("missing required key 'end_time'"), std::string::npos) << d[0].str();
+  // An element replaced by a --set value that is no map: said to be the --set's, not placed at
+  // the element's line as if the file held it.
+  d = problems(text, {"solver.end_time=2", "joints.piv=5"});
+  ASSERT_EQ(d.size(), 1u);
+  EXPECT_EQ(d[0].str(), "model.yaml: joint 'piv': expected a map of keys such as {type: revolute, journal: "
+                        "..., bearing: ...}, got '5' (value set with --set)");
+}
+
+TEST(ModelLoader, AKeyThatIsNoNameIsRefusedAtItsPlace) {
+  // `~:` (a null key) became an element named "null" (channels null.Fx, ...).
+  const auto d = problems("name: m\nbodies:\n  a: {mass: 1, inertia: 1}\njoints:\n"
+                          "  ~: {type: revolute, journal: a.O, bearing: ground.O}\n"
+                          "  ? [x, y]\n  : {type: revolute, journal: a.O, bearing: ground.O}\n"
+                          "solver: {end_time: 1}\n", {});
+  ASSERT_EQ(d.size(), 2u);
+  EXPECT_EQ(d[0].str(), "model.yaml:5:3: a key must be a name, got nothing (~ or an empty key)");
+  EXPECT_EQ(d[1].str(), "model.yaml:6:5: a key must be a name, got a list");
 }
 
 TEST(Overrides, ClearanceZeroMakesTheJointIdeal) {

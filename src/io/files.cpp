@@ -279,7 +279,10 @@ void remove_earlier_output(const std::string& path, const std::string& marker, b
     return;
   }
   throw std::invalid_argument(path + ": " +
-                              (st.type() == fs::file_type::directory ? "a folder" : "not a file") +
+                              (st.type() == fs::file_type::directory ? "a folder"
+                               : st.type() == fs::file_type::fifo    ? "a named pipe"
+                               : st.type() == fs::file_type::socket  ? "a socket"
+                                                                     : "a device or special file") +
                               " that lash did not write is in the way; it is left alone: move it "
                               "or choose another output folder");
 }

@@ -878,8 +878,11 @@ class Loader {
   bool element_map(const KeyValue& kv, const std::string& element, const std::string& example) {
     if (kv.second.IsMap()) return true;
     const YAML::Node at = Section::has_position(kv.second) ? kv.second : kv.first;
-    r_.error(at, element, "expected a map of keys such as " + example + ", got " +
-                              Section::kind(kv.second));
+    // A value with no place in the file is a --set's (`--set joints.rod_slider=5`): said so,
+    // where the key's place alone read as the file's own text.
+    const bool set = !Section::has_position(kv.second) && kv.second.IsDefined() && !kv.second.IsNull();
+    r_.error(set ? kv.second : at, element, "expected a map of keys such as " + example + ", got " +
+                                               Section::kind(kv.second));
     return false;
   }
 
@@ -1475,6 +1478,12 @@ void check_structure(const std::string& text, const YAML::Node& root, Reporter& 
         continue;
       }
       const YAML::Node key = it->first;
+      if (!key.IsScalar()) {  // (yaml-cpp reads a null key, `~:`, as the name "null")
+        const YAML::Mark m = key.Mark();
+        found.push_back({r.file, m.line + 1, m.column + 1, "",
+                         std::string("a key must be a name, got ") +
+                             (key.IsNull() ? "nothing (~ or an empty key)" : key.IsSequence() ? "a list" : "a map")});
+      }
       if (key.IsScalar()) {
         const YAML::Mark m = key.Mark();
         const auto [first, fresh] = keys.emplace(key.Scalar(), m);

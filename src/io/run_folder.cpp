@@ -23,6 +23,12 @@ namespace lash {
 
 namespace {
 
+/// A line's ending as a Windows editor saves it (CR LF): the CR is no part of the last field
+/// (it made "'-3.91123009' is not a finite number", the CR invisible in the message).
+void drop_cr(std::string& line) {
+  if (!line.empty() && line.back() == '\r') line.pop_back();
+}
+
 using nlohmann::json;
 
 std::string fmt_g(double v) {
@@ -98,6 +104,7 @@ struct CsvRows {
       if (in.bad()) throw IoError(path, "read failed");
       return false;
     }
+    drop_cr(s);
     ++line;
     const std::string where = path + ":" + std::to_string(line);
     size_t col = 0, a = 0;
@@ -265,9 +272,10 @@ RecordedRun read_run_folder(const std::string& dir, const Model& model) {
     std::ifstream in(events_path);
     std::string line;
     long long n = 0;
-    if (!std::getline(in, line) || line != "time,joint,event,velocity")
+    if (!std::getline(in, line) || (drop_cr(line), line != "time,joint,event,velocity"))
       damaged(events_path + ":1: expected the header 'time,joint,event,velocity'");
     while (std::getline(in, line)) {
+      drop_cr(line);
       ++n;
       const std::string where = events_path + ":" + std::to_string(n + 1);
       const auto f = split(line);
@@ -349,6 +357,7 @@ RecordedRun read_run_folder(const std::string& dir, const Model& model) {
   if (!csv->in) throw IoError(run.series_file, "cannot be opened");
   std::string header;
   std::getline(csv->in, header);
+  drop_cr(header);
   std::string expected = "time";
   for (const auto& c : run.columns) expected += "," + c;
   if (header != expected)
