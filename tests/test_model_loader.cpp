@@ -320,6 +320,13 @@ joints:
   d = problems(text, {"solver.rtol=1e-7"});
   ASSERT_EQ(d.size(), 1u);
   EXPECT_NE(d[0].str().find("missing required key 'end_time'"), std::string::npos) << d[0].str();
+  // A step limit no integrator can take at end_time: refused naming max_step (the run failed
+  // with "step size underflow (h = 1e-300)").
+  d = problems(text, {"solver.end_time=2", "solver.max_step=1e-300"});
+  ASSERT_EQ(d.size(), 1u);
+  EXPECT_EQ(d[0].str(), "model.yaml: solver: max_step 1e-300 s is below the smallest step an integrator "
+                        "can take at end_time (7.11e-15 s); 0 leaves the step unlimited (value set with --set)");
+  EXPECT_TRUE(problems(text, {"solver.end_time=2", "solver.max_step=1e-14"}).empty());
   // An element replaced by a --set value that is no map: said to be the --set's, not placed at
   // the element's line as if the file held it.
   d = problems(text, {"solver.end_time=2", "joints.piv=5"});

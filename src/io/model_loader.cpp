@@ -1200,6 +1200,14 @@ class Loader {
     const bool end_time_given = r_.list.size() == problems_before;
     st.output_interval = s.number("output_interval", " (s)", positive).value_or(st.end_time / 1000);
     st.max_step = s.number("max_step", " (s)", non_negative).value_or(0.0);
+    // A step limit below what an integrator can take at end_time (16 ε·max(1, t)): the run
+    // failed with "step size underflow (h = 1e-300)", max_step unnamed. (A limit this run can
+    // take but so small that the steps would outnumber max_steps stops it as stalled.)
+    if (const double floor = 16.0 * std::numeric_limits<double>::epsilon() * std::max(1.0, st.end_time);
+        st.max_step > 0.0 && st.max_step < floor)
+      r_.error(s.at("max_step"), "solver",
+               "max_step " + fmt::format("{:g}", st.max_step) + " s is below the smallest step an integrator "
+               "can take at end_time (" + fmt::format("{:.3g}", floor) + " s); 0 leaves the step unlimited");
     if (auto ms = s.number("max_steps", "", [](double v) {
           return v >= 1 && v <= 1e15 && v == std::floor(v) ? "" : "a whole number in [1, 1e15]";
         }))
