@@ -311,7 +311,28 @@ TEST(EndTime, NoStageIsEvaluatedPastTheRunsEnd) {
     }
     EXPECT_LE(latest, o.end_time);
     EXPECT_NEAR(y[0], std::cos(o.end_time), 1e-7);
+    // A caller going on past end_time gets there (BDF without a step hook returned "reached"
+    // at its stop time, end_time).
+    auto plain = make(oscillator(), o);
+    y << 1.0, 0.0;
+    plain->reset(0, y);
+    const Advance past = plain->advance(1.5, y);
+    ASSERT_EQ(past.kind, Advance::reached) << past.message;
+    EXPECT_EQ(past.t, 1.5);
+    EXPECT_NEAR(y[0], std::cos(1.5), 1e-6);
   }
+  // The last step never exceeds max_step to reach end_time (it ended 1 % past it).
+  IntegratorOptions o;
+  o.max_step = 0.1;
+  o.end_time = 0.1005;
+  double widest = 0.0;
+  auto integ = make_dopri5(oscillator(), o);
+  integ->set_step_hook([&](double t0, double t1) { widest = std::max(widest, t1 - t0); });
+  Eigen::VectorXd y(2);
+  y << 1.0, 0.0;
+  integ->reset(0, y);
+  ASSERT_EQ(integ->advance(o.end_time, y).kind, Advance::reached);
+  EXPECT_LE(widest, 0.1);
 }
 
 TEST(Failure, BdfMaxStepsCountsTheWholeRun) {

@@ -292,6 +292,21 @@ TEST(Overrides, AValueReachedThroughAnAliasChangesThereOnly) {
   EXPECT_EQ(again.bodies[2].inertia, 2.0);
   EXPECT_NE(lm.resolved_yaml.find("b: {mass: 1, inertia: 1, position: [1, 0]}"), std::string::npos)
       << lm.resolved_yaml;
+  // The file's own values beside the changed one keep their places in the file: a bad clearance
+  // is reported at its line, not as "(value set with --set)" (the copied map's entries were new
+  // nodes in a first version).
+  std::string flores = lash::test::read_file(lash::test::example_path("flores_slider_crank.yaml"));
+  const auto swap = [&](const std::string& from, const std::string& to) {
+    ASSERT_NE(flores.find(from), std::string::npos) << from;
+    flores.replace(flores.find(from), from.size(), to);
+  };
+  swap("material: {youngs_modulus", "material: &steel {youngs_modulus");
+  swap("slider.O, clearance: 0.5e-3}", "slider.O, clearance: -0.5e-3, material: *steel}");
+  const auto d = problems(flores, {"joints.rod_slider.material.youngs_modulus=100e9"});
+  ASSERT_EQ(d.size(), 1u);
+  EXPECT_EQ(d[0].str().rfind("model.yaml:51:", 0), 0u) << d[0].str();
+  EXPECT_NE(d[0].str().find("clearance must be >= 0"), std::string::npos) << d[0].str();
+  EXPECT_EQ(d[0].str().find("--set"), std::string::npos) << d[0].str();
 }
 
 TEST(Overrides, SectionsOfDefaultsAreMadeWhereTheFileHasNone) {
@@ -342,7 +357,7 @@ TEST(ModelLoader, AKeyThatIsNoNameIsRefusedAtItsPlace) {
                           "  ? [x, y]\n  : {type: revolute, journal: a.O, bearing: ground.O}\n"
                           "solver: {end_time: 1}\n", {});
   ASSERT_EQ(d.size(), 2u);
-  EXPECT_EQ(d[0].str(), "model.yaml:5:3: a key must be a name, got nothing (~ or an empty key)");
+  EXPECT_EQ(d[0].str(), "model.yaml:5:3: a key must be a name, got nothing (~, null or an empty key)");
   EXPECT_EQ(d[1].str(), "model.yaml:6:5: a key must be a name, got a list");
 }
 

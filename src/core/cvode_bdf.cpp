@@ -135,9 +135,12 @@ class CvodeBdf final : public Integrator {
     if (double t_now = t_; o_.end_time > 0 && CVodeGetCurrentTime(mem_, &t_now) == CV_SUCCESS &&
                            t_now < o_.end_time)
       CVodeSetStopTime(mem_, o_.end_time);
-    const int flag =
-        hook_ || stop_ || p_.project || p_.halt ? one_step_to(t_out, t_ret)
-                                     : CVode(mem_, t_out, y_, &t_ret, CV_NORMAL);
+    int flag = hook_ || stop_ || p_.project || p_.halt ? one_step_to(t_out, t_ret)
+                                                       : CVode(mem_, t_out, y_, &t_ret, CV_NORMAL);
+    // Asked past end_time (a caller of its own going on): the stop time returned there, and,
+    // reached, it no longer holds.
+    while (flag == CV_TSTOP_RETURN && t_ret < t_out && !pending_)
+      flag = CVode(mem_, t_out, y_, &t_ret, CV_NORMAL);
     if (pending_) {  // the right-hand side threw (e.g. an ExpressionError): CVODE has stopped
       std::exception_ptr e = pending_;
       pending_ = nullptr;

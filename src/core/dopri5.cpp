@@ -151,9 +151,13 @@ class Dopri5 final : public Integrator {
       if (o_.max_step > 0) h = std::min(h, o_.max_step);
       // No stage past the run's end: a model need not be defined there (a load of
       // sqrt(1 − time) with end_time 1 s failed at t = 1.00005 s and lost the rows before it).
-      // A step that would end within 1 % of a step of it ends on it.
-      const bool to_end = o_.end_time > t_ && t_ + 1.01 * h >= o_.end_time;
-      if (to_end) h = o_.end_time - t_;
+      // A step that would end within 1 % of a step of it ends on it, unless that passes
+      // max_step; a remainder below the smallest step (after an event just before the end) is
+      // stepped over as before.
+      const double left = o_.end_time - t_;
+      const bool to_end = left > 16.0 * std::numeric_limits<double>::epsilon() * std::max(1.0, std::abs(t_)) &&
+                          1.01 * h >= left && (o_.max_step <= 0 || left <= o_.max_step);
+      if (to_end) h = left;
       if (h < 16.0 * std::numeric_limits<double>::epsilon() * std::max(1.0, std::abs(t_)))
       {
         char msg[96];

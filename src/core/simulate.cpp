@@ -449,9 +449,9 @@ void Simulator::set_interrupt(const std::atomic<int>* flag) {
   integrator_->set_stop_flag(flag);
 }
 
-// A function-try-block: an expression failing mid-run (ExpressionError) is a numerical failure.
 void Simulator::set_end_time(double t) { integrator_->set_end_time(t); }
 
+// A function-try-block: an expression failing mid-run (ExpressionError) is a numerical failure.
 bool Simulator::advance_to(double t_target, Observer* observer) try {
   hook_steps(observer);
   while (t_ < t_target) {

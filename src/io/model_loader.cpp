@@ -44,6 +44,7 @@ std::string join(const std::vector<std::string>& v) {
 struct Reporter {
   std::string file;
   std::vector<Diagnostic> list;
+  bool through_alias = false;  ///< an override went through a YAML alias (apply_override)
   void error(const YAML::Node& at, const std::string& element, const std::string& message) {
     const YAML::Mark m = at.IsDefined() ? at.Mark() : YAML::Mark::null_mark();
     const bool from_override = m.line < 0;
@@ -1320,11 +1321,12 @@ YAML::Node override_value(const std::string& value) {
 /// Applies "a.b.c=value": the parents must exist; the last key may be new. A section made of
 /// settings with defaults (`solver`, `clearance_defaults`) is made where the file has none, so
 /// `--set solver.end_time=1` works on a model that states no solver settings.
-/// Whether a node on the path `keys` from `root` (each map on it and the value at its end) is
-/// also reached from another place in the tree: an anchor's node and its aliases are one node
-/// (yaml-cpp), so writing through one path writes through all. Collections are walked once each
-/// (an alias of one is not walked again, so self-references and exponential aliases cost nothing).
-bool path_is_shared(const YAML::Node& root, const std::vector<std::string>& keys) {
+/// For each node on the path `keys` from `root` (each map on it and the value at its end, as far
+/// as they exist): whether it is also reached from another place in the tree. An anchor's node
+/// and its aliases are one node (yaml-cpp), so writing through one path writes through all.
+/// Collections are walked once each (an alias of one is not walked again, so self-references
+/// and exponential aliases cost nothing).
+std::vector<bool> shared_on_path(const YAML::Node& root, const std::vector<std::string>& keys) {
   std::vector<YAML::Node> on_path;
   YAML::Node n = root;
   for (const auto& k : keys) {
@@ -1349,11 +1351,13 @@ bool path_is_shared(const YAML::Node& root, const std::vector<std::string>& keys
     for (auto it = c.begin(); it != c.end(); ++it) {
       const YAML::Node child = c.IsMap() ? YAML::Node(it->second) : YAML::Node(*it);
       for (size_t i = 0; i < on_path.size(); ++i)
-        if (child.is(on_path[i]) && ++seen[i] > 1) return true;
+        if (child.is(on_path[i])) ++seen[i];
       todo.push_back(child);
     }
   }
-  return false;
+  std::vector<bool> shared(keys.size(), false);
+  for (size_t i = 0; i < on_path.size(); ++i) shared[i] = seen[i] > 1;
+  return shared;
 }
 
 void apply_override(YAML::Node root, const std::string& spec, Reporter& r) {
@@ -1393,37 +1397,44 @@ void apply_override(YAML::Node root, const std::string& spec, Reporter& r) {
     r.list.push_back({"--set " + path, 0, 0, "", "'" + walked + "' is not a map"});
     return;
   }
-  if (!path_is_shared(root, keys)) {
+  const std::vector<bool> shared = shared_on_path(root, keys);
+  if (std::none_of(shared.begin(), shared.end(), [](bool b) { return b; })) {
     node[keys.back()] = override_value(value);
     return;
   }
-  // A map on the path, or the value, is an alias's too (`bearing_material: *steel`): written in
-  // place, the value would change wherever the anchor is used. The maps on the path are copied
-  // instead, and the copies replace the path from the root down: in order, their keys and
-  // scalar values new nodes (model_resolved.yaml would show shared ones as aliases of each
-  // other), their collections the originals' (aliases off the path stay aliases).
-  std::vector<YAML::Node> on_path{root};
-  for (size_t i = 0; i + 1 < keys.size(); ++i) on_path.push_back(on_path.back()[keys[i]]);
-  const auto fresh = [](const YAML::Node& n) {
-    if (!n.IsScalar()) return n;
-    YAML::Node copy(n.Scalar());
-    copy.SetTag(n.Tag());
-    return copy;
+  // A map on the path, or the value, is an alias's too (`bearing_material: *steel`): written
+  // through, the value would change wherever the anchor is used. Such a map is copied (its
+  // entries the original's nodes, so their places in the file stay known), and the copy takes
+  // its slot in its parent: the entries from that slot on are taken out and put back in order
+  // (yaml-cpp's maps keep their order; a slot's node may be the alias's too, so it cannot be
+  // written in place). The maps themselves keep their places in the file; a copy has none.
+  r.through_alias = true;
+  const auto replace_slot = [](YAML::Node parent, const std::string& key, const YAML::Node& with) {
+    std::vector<std::pair<YAML::Node, YAML::Node>> tail;
+    for (auto it = parent.begin(); it != parent.end(); ++it)
+      if (!tail.empty() || (it->first.IsScalar() && it->first.Scalar() == key))
+        tail.emplace_back(it->first, it->second);
+    for (const auto& kv : tail) parent.remove(kv.first);
+    if (tail.empty()) parent[key] = with;
+    for (size_t j = 0; j < tail.size(); ++j) parent[tail[j].first] = j == 0 ? with : tail[j].second;
   };
-  YAML::Node replacement = override_value(value);
-  for (size_t i = keys.size(); i-- > 0;) {
-    YAML::Node copy(YAML::NodeType::Map);
-    copy.SetStyle(on_path[i].Style());
-    bool placed = false;
-    for (const auto& kv : on_path[i]) {
-      const bool here = kv.first.IsScalar() && kv.first.Scalar() == keys[i];
-      copy[fresh(kv.first)] = here ? replacement : fresh(kv.second);
-      placed = placed || here;
+  YAML::Node cur = root;
+  for (size_t i = 0; i < keys.size(); ++i) {
+    if (i + 1 == keys.size()) {
+      if (shared[i]) replace_slot(cur, keys[i], override_value(value));
+      else cur[keys[i]] = override_value(value);
+      break;
     }
-    if (!placed) copy[keys[i]] = replacement;
-    replacement = copy;
+    YAML::Node child = cur[keys[i]];
+    if (shared[i]) {
+      YAML::Node copy(YAML::NodeType::Map);
+      copy.SetStyle(child.Style());
+      for (const auto& kv : child) copy[kv.first] = kv.second;
+      replace_slot(cur, keys[i], copy);
+      child.reset(copy);
+    }
+    cur.reset(child);
   }
-  root = replacement;
 }
 
 /// Every key that appears twice in one map, with both places (yaml-cpp keeps both, and a lookup
@@ -1490,7 +1501,7 @@ void check_structure(const std::string& text, const YAML::Node& root, Reporter& 
         const YAML::Mark m = key.Mark();
         found.push_back({r.file, m.line + 1, m.column + 1, "",
                          std::string("a key must be a name, got ") +
-                             (key.IsNull() ? "nothing (~ or an empty key)" : key.IsSequence() ? "a list" : "a map")});
+                             (key.IsNull() ? "nothing (~, null or an empty key)" : key.IsSequence() ? "a list" : "a map")});
       }
       if (key.IsScalar()) {
         const YAML::Mark m = key.Mark();
@@ -1565,6 +1576,32 @@ std::optional<BadByte> first_invalid_utf8(std::string_view s) {
   return std::nullopt;
 }
 
+/// A copy of `n` into `out` with every alias written out in full (new nodes, nothing shared):
+/// false when it would take more than `budget` nodes or nest deeper than 64.
+bool expanded(const YAML::Node& n, YAML::Node& out, long& budget, int depth) {
+  if (--budget < 0 || depth > 64) return false;
+  if (n.IsScalar()) {
+    out = YAML::Node(n.Scalar());
+    out.SetTag(n.Tag());
+    return true;
+  }
+  if (n.IsSequence() || n.IsMap()) {
+    out = YAML::Node(n.IsMap() ? YAML::NodeType::Map : YAML::NodeType::Sequence);
+    out.SetStyle(n.Style());
+    for (auto it = n.begin(); it != n.end(); ++it) {
+      YAML::Node k, v;
+      if (n.IsMap() ? !(expanded(it->first, k, budget, depth + 1) && expanded(it->second, v, budget, depth + 1))
+                    : !expanded(*it, v, budget, depth + 1))
+        return false;
+      if (n.IsMap()) out.force_insert(k, v);
+      else out.push_back(v);
+    }
+    return true;
+  }
+  out = YAML::Node(YAML::NodeType::Null);
+  return true;
+}
+
 LoadedModel load_root(YAML::Node root, const std::string& filename,
                       const std::vector<std::string>& overrides) {
   Reporter over;
@@ -1577,7 +1614,14 @@ LoadedModel load_root(YAML::Node root, const std::string& filename,
   out.output = loader.output();
   out.positions = loader.positions();
   out.model.source = filename;
-  if (!overrides.empty()) out.resolved_yaml = YAML::Dump(root);
+  if (!overrides.empty()) {
+    // Through an alias, the copied map shares its entries' nodes with the anchor's: written as
+    // they are, they come out as anchors and aliases of single keys and numbers ("*1 : *2").
+    // Written out in full instead, if that stays small (not an alias bomb).
+    YAML::Node plain;
+    long budget = 100000;
+    out.resolved_yaml = YAML::Dump(over.through_alias && expanded(root, plain, budget, 0) ? plain : root);
+  }
   return out;
 }
 
