@@ -59,7 +59,7 @@ ChannelExtrema::ChannelExtrema(const Model& model, std::vector<int> tracked)
 
 void ChannelExtrema::sample(double t, const double* values) {
   if (t < from_ || t > to_) return;
-  if (!in_step_ && t <= step_end_) {  // an output inside the last step: end_at counts it again
+  if (keep_last_step_ && !in_step_ && t <= step_end_) {  // an output inside the last step: end_at counts it again
     since_t_.push_back(t);
     since_values_.insert(since_values_.end(), values, values + ext_.size());
   }
@@ -103,10 +103,12 @@ void ChannelExtrema::end_at(double t) {
 void ChannelExtrema::step(double t0, double t1, const Eigen::VectorXd& y1, const Workspace& ws1,
                           StepProbe& probe) {
   // What end_at needs to forget this step: the extrema before it.
-  before_step_ = ext_;
-  step_end_ = t1;
-  since_t_.clear();
-  since_values_.clear();
+  if (keep_last_step_) {
+    before_step_ = ext_;
+    step_end_ = t1;
+    since_t_.clear();
+    since_values_.clear();
+  }
   in_step_ = true;
   struct Done {
     bool& flag;

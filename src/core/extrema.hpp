@@ -74,6 +74,9 @@ class ChannelExtrema {
   /// forgotten and the samples since, up to t, count again; the extrema are then over the run
   /// up to t, less any turning point inside the last step before t (not searched again).
   void end_at(double t);
+  /// Keeps what end_at needs (a copy of the extrema before each step, the samples since): only
+  /// for an observer that may stop the run at an output (the results writer).
+  void keep_last_step() { keep_last_step_ = true; }
 
   const std::vector<ChannelExtremum>& extrema() const { return ext_; }
   long refinements() const { return refinements_; }      ///< turning-point searches run
@@ -105,6 +108,7 @@ class ChannelExtrema {
   double step_end_ = -std::numeric_limits<double>::infinity();
   std::vector<double> since_t_, since_values_;
   bool in_step_ = false;
+  bool keep_last_step_ = false;
 };
 
 }  // namespace lash

@@ -56,6 +56,7 @@ ResultsWriter::ResultsWriter(const Model& model, const std::string& folder,
     : model_(model), folder_(folder), resolved_yaml_(resolved_yaml),
       overrides_(std::move(overrides)), from_(std::move(from)), output_(std::move(output)),
       extrema_(model) {
+  extrema_.keep_last_step();  // a write error stops the run at an output its last step passed
   // A selection that matches nothing, or a format this build lacks, is refused before the
   // folder is touched.
   channels_ = channel_info(model);
