@@ -1357,6 +1357,13 @@ TEST(Cli, AnOutputFolderNamedByAFileIsAMistakenOption) {
     EXPECT_EQ(r.code, 2) << cmd << "\n" << r.out;
     EXPECT_NE(r.out.find(file.string() + ": exists and is not a folder"), std::string::npos) << r.out;
     EXPECT_EQ(lash::test::read_file(file.string()), "kept\n");
+    // A path through the file (results.csv/sub) is the same mistake: it exited 3 as a failed
+    // write.
+    const Result through = run_lash(cmd + " -q -o " + (file / "sub").string());
+    EXPECT_EQ(through.code, 2) << cmd << "\n" << through.out;
+    EXPECT_NE(through.out.find("a part of this path is a file, not a folder"), std::string::npos)
+        << through.out;
+    EXPECT_EQ(lash::test::read_file(file.string()), "kept\n");
   }
   fs::remove_all(dir);
 }

@@ -837,6 +837,33 @@ TEST(SweepCli, AKilledStudyResumesWithEveryRunExactlyOnce) {
   fs::remove_all(dir);
 }
 
+TEST(SweepCli, ARunDeletedFromTheDatabaseByHandIsRunAgainOnResume) {
+  // A runs row deleted with its metrics and sections kept: --resume ran it again and stopped on
+  // "UNIQUE constraint failed ...; then map::at" (exit 3).
+  const fs::path dir = temp_dir("hand_deleted");
+  const fs::path study = write_study(
+      dir, "set: {solver.end_time: 0.03, solver.output_interval: 1.0e-4}\n"
+           "parameters:\n  drivers.crank.speed_rpm: {values: [4000, 5000]}\n"
+           "transient: {periods: 1}\nkeep: {sections: [rod_slider.ex], channels: [rod_slider.Fn]}\n");
+  const fs::path out = dir / "out";
+  Result r = lash_cmd("sweep " + study.string() + " -q -o " + out.string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  const std::string m = "select run, name, value from metrics order by run, name";
+  const std::string sec = "select * from sections order by run, k";
+  const auto metrics = query(out / "study.db", m), sections = query(out / "study.db", sec);
+  ASSERT_FALSE(sections.empty());
+  sqlite3* h = nullptr;
+  ASSERT_EQ(sqlite3_open((out / "study.db").c_str(), &h), SQLITE_OK);
+  ASSERT_EQ(sqlite3_exec(h, "delete from runs where run = 1", nullptr, nullptr, nullptr), SQLITE_OK);
+  sqlite3_close(h);
+  r = lash_cmd("sweep " + study.string() + " -q --resume -o " + out.string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_EQ(query(out / "study.db", "select count(*) from runs")[0], "2");
+  EXPECT_EQ(query(out / "study.db", m), metrics);
+  EXPECT_EQ(query(out / "study.db", sec), sections);
+  fs::remove_all(dir);
+}
+
 TEST(SweepCli, AKilledContinuationResumesFromTheRecordedState) {
   const fs::path dir = temp_dir("continuation");
   const fs::path study = write_study(

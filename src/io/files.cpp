@@ -220,6 +220,10 @@ FolderLock::FolderLock(const std::string& folder) {
     throw std::invalid_argument(folder + ": exists and is not a folder; name a folder (it is "
                                 "created if missing)");
   std::filesystem::create_directories(folder, ec);
+  // So is a path through a file (afile/sub): nothing was written, the option names no folder.
+  if (ec == std::errc::not_a_directory)
+    throw std::invalid_argument(folder + ": a part of this path is a file, not a folder; name a "
+                                "folder (it is created if missing)");
   if (ec) throw IoError(folder, "cannot create the output folder: " + ec.message());
   const std::string path = folder + "/.lash.lock";
   // O_NOFOLLOW: a planted symbolic link must not make the pid overwrite another file.

@@ -215,6 +215,7 @@ StudyDb::StudyDb(const std::string& path, const StudySpec& spec, int total_runs)
       exec("CREATE INDEX sections_run ON sections(run)");
       exec("CREATE TABLE series(run INTEGER NOT NULL, channel TEXT NOT NULL, time TEXT NOT NULL, "
            "value TEXT NOT NULL)");
+      exec("CREATE INDEX series_run ON series(run)");
       exec("CREATE TABLE states(run INTEGER PRIMARY KEY, driver_speed REAL, state TEXT NOT NULL)");
       Stmt st(db_, "INSERT INTO study(key, value) VALUES(?, ?)", path_);
       const std::map<std::string, std::string> info = {
@@ -280,6 +281,12 @@ std::set<int> StudyDb::finished() const {
 void StudyDb::add(const StudyRun& run, const RunRecord& r, const std::string& worker) {
   exec("BEGIN IMMEDIATE");
   try {
+    // What is left of this run without its row in runs (a database changed by hand: the row
+    // deleted, so --resume runs it again) is replaced, not collided with.
+    for (const char* table : {"metrics", "sections", "series", "states"}) {
+      Stmt d(db_, std::string("DELETE FROM ") + table + " WHERE run = ?", path_);
+      d.bind(1, static_cast<long>(r.index)).run();
+    }
     std::string sql = "INSERT INTO runs(run";
     for (const auto& p : parameters_) sql += ", " + quoted(p);
     sql += ", status, message, verdict, t_reached, wall_seconds, steps, rhs_evaluations, events, "
@@ -373,8 +380,10 @@ void StudyDb::export_csv(const std::string& folder) const {
   Stmt s(db_, "SELECT run, k, t, channel, value FROM sections ORDER BY run, k, channel", path_);
   while (s.step()) {
     const int run = static_cast<int>(s.number(0));
+    const auto found = by_run.find(run);
+    if (found == by_run.end()) continue;  // no row in runs (a database changed by hand): as metrics
+    const auto* row = found->second;
     sec << run;
-    const auto* row = by_run.at(run);
     for (size_t p = 0; p < t.parameters.size(); ++p)
       sec << "," << (std::isnan(row->numbers[p]) ? csv_field(row->values[p]) : csv_number(row->numbers[p]));
     sec << "," << static_cast<long>(s.number(1)) << "," << csv_number(s.number(2)) << ","
