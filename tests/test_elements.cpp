@@ -481,7 +481,8 @@ TEST(State, AClearanceJointsPartThatCannotBeIsRefusedAndAChangedGapIsSaid) {
   const std::string path = ::testing::TempDir() + "lash_state_gaps.json";
   write_state(path, m, ws, first.final_state);
   const State saved = read_state(path, m, ws);
-  std::filesystem::remove(path);
+  const std::string path_kept = path + ".edited.json";
+  std::filesystem::rename(path, path_kept);
   ASSERT_EQ(saved.gaps.size(), 1u);
   EXPECT_GT(saved.gaps[0], 0.0);  // in contact
   // Continued to 7 ms under the same model: nothing to say.
@@ -498,6 +499,37 @@ TEST(State, AClearanceJointsPartThatCannotBeIsRefusedAndAChangedGapIsSaid) {
   ASSERT_EQ(renamed_said.size(), 1u);
   EXPECT_EQ(renamed_said[0].find("the continued state was written by model 'flores_slider_crank', "
                                  "and this is 'press'"), 0u) << renamed_said[0];
+  // A file without `model` (edited by hand) is said as well; one whose `model` is not a name,
+  // or without `modes`, is refused by name (not a JSON library's "key 'modes' not found").
+  {
+    nlohmann::json j = nlohmann::json::parse(std::ifstream(path_kept));
+    j.erase("model");
+    std::ofstream(path_kept) << j.dump();
+    const State unnamed = read_state(path_kept, m, ws);
+    EXPECT_TRUE(unnamed.file_names_no_model);
+    const std::vector<std::string> said = resume_warnings(next, wn, unnamed);
+    ASSERT_EQ(said.size(), 1u);
+    EXPECT_EQ(said[0].find("the continued state names no model that wrote it"), 0u) << said[0];
+    EXPECT_FALSE(saved.file_names_no_model);
+    for (const auto& [key, value, expected] :
+         {std::tuple<const char*, nlohmann::json, const char*>{
+              "model", 5, "'model' must be the name of the model that wrote the state, got 5"},
+          {"model", "", "'model' must be the name of the model that wrote the state"},
+          {"modes", nullptr, "'modes' is missing"},
+          {"modes", nlohmann::json::array({1}), "'modes' must map each clearance joint"}}) {
+      nlohmann::json bad = j;
+      if (value.is_null()) bad.erase(key);
+      else bad[key] = value;
+      std::ofstream(path_kept) << bad.dump();
+      try {
+        read_state(path_kept, m, ws);
+        ADD_FAILURE() << key << " " << value.dump() << ": read";
+      } catch (const std::runtime_error& e) {
+        EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what();
+      }
+    }
+    std::filesystem::remove(path_kept);
+  }
   // The slider 5 m away along its guide: the ideal joints hold, the journal cannot be there.
   const int slider = 2;
   State far = saved;

@@ -1,6 +1,8 @@
 // A run folder read back (io/run_folder.hpp): the analyses from what a run wrote agree with the
 // same analyses made while it ran (the reference), and what the files lack is said.
 #include <gtest/gtest.h>
+
+#include <tuple>
 #include <unistd.h>
 
 #include <algorithm>
@@ -254,6 +256,21 @@ TEST(RunFolder, NonFiniteTimesAndFilesThatAreNotRegularAreRefused) {
                    "' is not a finite number");
     std::ofstream(dir / "timeseries.csv") << csv;
   }
+  // Fields of summary.json of the wrong kind are named, with what was expected (not "[json.
+  // exception.type_error.304] cannot use at() with string").
+  const std::string summary_text = lash::test::read_file((dir / "summary.json").string());
+  for (const auto& [path, value, expected] :
+       {std::tuple<const char*, nlohmann::json, const char*>{"/status", "ok", "status is \"ok\", expected an object"},
+        {"/status/outcome", 5, "status.outcome is 5, expected text"},
+        {"/output/channels", 5, "output.channels is 5, expected a list of names"},
+        {"/integrator/steps", "many", "integrator.steps is \"many\", expected a number"},
+        {"/channels/slider.x/t_max", nullptr, "channels.slider.x.t_max is null, expected a number"}}) {
+    nlohmann::json j = nlohmann::json::parse(summary_text);
+    j[nlohmann::json::json_pointer(path)] = value;
+    std::ofstream(dir / "summary.json") << j.dump();
+    expect_refused(expected);
+  }
+  std::ofstream(dir / "summary.json") << summary_text;
   // A link to /dev/zero would be read for ever: refused at once (ctest's time-out would end a
   // hang).
   for (const char* name : {"events.csv", "timeseries.csv"}) {

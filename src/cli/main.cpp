@@ -683,9 +683,6 @@ int main(int argc, char** argv) {
       }
       ra = lash::analyze_run(model, ao, &progress);
       result = ra.result;
-      writer->add_to_summary("verdict", {{"class", ra.verdict.kind},
-                                         {"evidence", ra.verdict.evidence},
-                                         {"rule", ra.verdict.rule}});
     } else {
       result = lash::simulate(model, ws, progress, {}, {}, run_options);
     }
@@ -716,14 +713,21 @@ int main(int argc, char** argv) {
       report_failed = true;
     }
   }
-  if (const int sig = g_interrupt.load(); sig != 0 && result.status.ok) {
-    // The run reached end_time; the signal came during the analyses or the report.
-    result.status.ok = false;
-    result.status.outcome = lash::RunOutcome::interrupted;
-    result.status.message = "interrupted by signal " + std::to_string(sig) +
-                            " after the run, during its analyses or report: timeseries.csv, "
-                            "events.csv and final_state.json are complete, the report is not";
-  }
+  // The run reached end_time and the signal came during the analyses or the report: the
+  // results are whole (outcome completed, so `lash report` and `analyze` take the folder and
+  // `--from` continues it), the report and the verdict (which may rest on analyses cut short)
+  // are left out, and lash exits as interrupted.
+  const int signal_after_run = result.status.ok ? g_interrupt.load() : 0;
+  if (signal_after_run != 0) {
+    if (with_report) lash::remove_report(out_dir);  // it may have finished just before the signal
+    writer->add_to_summary("interrupted_after_run",
+                           {{"signal", signal_after_run},
+                            {"message", "a signal during the analyses or the report: the results "
+                                        "are whole, the report and the verdict were not written"}});
+  } else if (with_report)
+    writer->add_to_summary("verdict", {{"class", ra.verdict.kind},
+                                       {"evidence", ra.verdict.evidence},
+                                       {"rule", ra.verdict.rule}});
   lash::RunStatus status;
   try {
     try {
@@ -743,6 +747,13 @@ int main(int argc, char** argv) {
   }
   int code = exit_code(status.outcome);
   if (report_failed && code == kExitOk) code = kExitIo;
+  if (signal_after_run != 0) {
+    std::cerr << "\ninterrupted by signal " << signal_after_run << " after the run, during its "
+              << (with_report ? "analyses or report" : "closing") << ": its results in " << out_dir
+              << "/ are whole" << (with_report ? "; `lash report " + out_dir + "` makes the report" : "")
+              << "\n";
+    return exit_code(lash::RunOutcome::interrupted);
+  }
   auto print_notes = [&](std::ostream& os) {
     for (const auto& line : report_notes) os << "report: " << line << "\n";
   };

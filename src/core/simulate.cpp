@@ -696,7 +696,11 @@ std::string stiffness_warning(const IntegratorStats& stats, const std::string& i
 
 std::vector<std::string> resume_warnings(const Model& model, Workspace& ws, const State& state) {
   std::vector<std::string> out;
-  if (!state.model.empty() && state.model != model.name)
+  if (state.file_names_no_model)
+    out.push_back("the continued state names no model that wrote it (its 'model' is missing: "
+                  "a file edited by hand?); its coordinates match this model's by name and "
+                  "number, so it runs; check that it is the state you meant");
+  else if (state.model != model.name)
     out.push_back("the continued state was written by model '" + state.model + "', and this is '" +
                   model.name + "': its coordinates match this model's by name and number, so it "
                   "runs; check that it is the state you meant");

@@ -31,6 +31,8 @@ struct State {
   /// The name of the model that wrote the state, if the state file says ("" otherwise):
   /// continuing another model's state (the same coordinates by chance) is then said.
   std::string model;
+  /// A state file without `model` (edited by hand): continuing it is said too.
+  bool file_names_no_model = false;
 };
 
 /// A located contact onset or separation of one clearance joint.

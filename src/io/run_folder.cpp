@@ -84,6 +84,35 @@ const json& member(const json& j, const std::string& path, const std::string& ke
   return j[key];
 }
 
+/// `name`'s value (its last part the key in `parent`: "status.outcome") as a T, or damaged()
+/// naming the field, what it holds and what was expected (not a JSON library's "cannot use at()
+/// with string").
+template <class T>
+T field(const json& parent, const std::string& path, const std::string& name) {
+  const std::string key = name.substr(name.rfind('.') + 1);
+  const std::string owner = name.find('.') == std::string::npos ? "" : name.substr(0, name.rfind('.'));
+  auto wrong = [&](const std::string& what) {
+    damaged(path + ": damaged (" + what + "); run the model again");
+  };
+  if (!parent.is_object())
+    wrong(owner + " is " + parent.dump().substr(0, 40) + ", expected an object");
+  if (!parent.contains(key)) wrong("no '" + name + "'");
+  const json& v = parent.at(key);
+  const std::string got = name + " is " + v.dump().substr(0, 40);
+  if constexpr (std::is_same_v<T, std::string>) {
+    if (!v.is_string()) wrong(got + ", expected text");
+  } else if constexpr (std::is_same_v<T, bool>) {
+    if (!v.is_boolean()) wrong(got + ", expected true or false");
+  } else if constexpr (std::is_same_v<T, double>) {
+    if (!v.is_number()) wrong(got + ", expected a number");
+  } else {
+    static_assert(std::is_same_v<T, std::vector<std::string>>);
+    if (!v.is_array() || !std::all_of(v.begin(), v.end(), [](const json& e) { return e.is_string(); }))
+      wrong(got + ", expected a list of names");
+  }
+  return v.get<T>();
+}
+
 RunOutcome outcome_of(const std::string& s) {
   if (s == "completed") return RunOutcome::completed;
   if (s == "interrupted") return RunOutcome::interrupted;
@@ -145,6 +174,7 @@ RecordedRun read_run_folder(const std::string& dir, const Model& model) {
   // A count (rows, steps, events): a whole number >= 0 as the run wrote it (1e30 became
   // -9223372036854775808, a conversion with no defined result).
   auto count = [&](const json& parent, const std::string& name) -> long {
+    field<double>(parent, summary_path, name);  // there, and a number
     const json& v = parent.at(name.substr(name.find('.') + 1));
     if (!v.is_number_integer() || (v.is_number_unsigned() ? v.get<unsigned long long>() > 1ULL << 62
                                                           : v.get<long long>() < 0))
@@ -179,19 +209,19 @@ RecordedRun read_run_folder(const std::string& dir, const Model& model) {
   try {
     const json& st = member(sum, summary_path, "status");
     RunStatus& s = run.result.status;
-    s.outcome = outcome_of(st.at("outcome").get<std::string>());
-    s.ok = st.at("ok").get<bool>();
-    s.t = st.at("time").get<double>();
-    s.element = st.at("element").get<std::string>();
-    s.message = st.at("message").get<std::string>();
+    s.outcome = outcome_of(field<std::string>(st, summary_path, "status.outcome"));
+    s.ok = field<bool>(st, summary_path, "status.ok");
+    s.t = field<double>(st, summary_path, "status.time");
+    s.element = field<std::string>(st, summary_path, "status.element");
+    s.message = field<std::string>(st, summary_path, "status.message");
     const json& in = member(sum, summary_path, "integrator");
-    run.result.integrator = in.at("name").get<std::string>();
+    run.result.integrator = field<std::string>(in, summary_path, "integrator.name");
     run.result.stats.steps = count(in, "integrator.steps");
     run.result.stats.rejected_steps = count(in, "integrator.rejected_steps");
     run.result.stats.rhs_evaluations = count(in, "integrator.rhs_evaluations");
     run.result.stats.events = count(in, "integrator.events");
     run.result.stats.projections = in.value("projections", 0L);
-    run.result.wall_seconds = in.at("wall_seconds").get<double>();
+    run.result.wall_seconds = field<double>(in, summary_path, "integrator.wall_seconds");
     run.result.outputs = count(in, "integrator.outputs");
     run.result.missed_events = count(in, "integrator.missed_events");
     run.result.max_constraint_violation = sum.at("max_constraint_violation").get<double>();
@@ -202,10 +232,11 @@ RecordedRun read_run_folder(const std::string& dir, const Model& model) {
       for (const auto& [name, c] : sum["channels"].items()) {
         if (!c.is_object() || !c.contains("min") || !c["min"].is_number()) continue;
         ChannelExtremum e;
-        e.min = c.at("min").get<double>();
-        e.t_min = c.at("t_min").get<double>();
-        e.max = c.at("max").get<double>();
-        e.t_max = c.at("t_max").get<double>();
+        const std::string at = "channels." + name + ".";
+        e.min = field<double>(c, summary_path, at + "min");
+        e.t_min = field<double>(c, summary_path, at + "t_min");
+        e.max = field<double>(c, summary_path, at + "max");
+        e.t_max = field<double>(c, summary_path, at + "t_max");
         e.seen = true;
         run.extrema[name] = e;
       }
@@ -237,8 +268,8 @@ RecordedRun read_run_folder(const std::string& dir, const Model& model) {
   std::string file;
   try {
     rows = count(output, "output.rows");
-    file = output.at("file").get<std::string>();
-    run.columns = output.at("channels").get<std::vector<std::string>>();
+    file = field<std::string>(output, summary_path, "output.file");
+    run.columns = field<std::vector<std::string>>(output, summary_path, "output.channels");
   } catch (const json::exception& e) {
     damaged(summary_path + ": damaged (" + e.what() + "); run the model again");
   }

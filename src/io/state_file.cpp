@@ -102,7 +102,14 @@ State read_state(const std::string& path, const Model& model, const Workspace& w
     if (j.contains("step") && !j.at("step").is_number())
       throw fail("'step' must be a number (s), got " + j.at("step").dump().substr(0, 40));
     st.step = j.value("step", 0.0);
-    if (j.contains("model") && j.at("model").is_string()) st.model = j.at("model").get<std::string>();
+    if (j.contains("model")) {  // the name of the model that wrote it (a warning if another)
+      if (!j.at("model").is_string() || j.at("model").get<std::string>().empty())
+        throw fail("'model' must be the name of the model that wrote the state, got " +
+                   j.at("model").dump().substr(0, 40));
+      st.model = j.at("model").get<std::string>();
+    } else {
+      st.file_names_no_model = true;
+    }
     if (!std::isfinite(st.step) || st.step < 0)
       throw fail("'step' must be a finite step size >= 0 s, got " + j.at("step").dump());
     const auto names = list_of("names", false).get<std::vector<std::string>>();
@@ -123,7 +130,10 @@ State read_state(const std::string& path, const Model& model, const Workspace& w
                  std::to_string(expected.size()) + " in the model)");
     }
     st.y = Eigen::Map<const Eigen::VectorXd>(y.data(), static_cast<Eigen::Index>(y.size()));
-    const json& modes = j.at("modes");
+    const json& modes = member("modes");
+    if (!modes.is_object())
+      throw fail("'modes' must map each clearance joint to 1 (contact) or 0 (free flight), got " +
+                 modes.dump().substr(0, 40));
     for (int k = 0; k < ws.nc; ++k) {
       const std::string& name = model.joints[ws.clearance_joints[k]].name;
       if (!modes.contains(name))
