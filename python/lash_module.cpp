@@ -17,6 +17,7 @@
 #include <cmath>
 #include <condition_variable>
 #include <csignal>
+#include <cstdio>
 #include <cstdlib>
 #include <map>
 #include <memory>
@@ -26,6 +27,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <thread>
+#include <type_traits>
 
 #include "analysis/dynamics_analysis.hpp"
 #include "analysis/signal.hpp"
@@ -234,6 +236,8 @@ lash::State start_state(const lash::Model& model, const py::object& start) {
   if (py::isinstance<py::str>(start)) {
     try {
       st = lash::read_state(start.cast<std::string>(), model, ws);
+    } catch (const lash::IoError&) {  // cannot be read (no such file): IoError, an OSError
+      throw;
     } catch (const std::runtime_error& e) {
       throw std::invalid_argument(e.what());
     }
@@ -247,6 +251,9 @@ lash::State start_state(const lash::Model& model, const py::object& start) {
     // model's own failure).
     auto as = [&](const char* key, const char* what, auto value) {
       try {
+        // A bool is an int to pybind11 (True read as 1 s); refused as every other argument does.
+        if constexpr (std::is_same_v<decltype(value), double>)
+          if (py::isinstance<py::bool_>(d[key])) throw py::cast_error();
         return py::cast<decltype(value)>(d[key]);
       } catch (const py::cast_error&) {
         throw py::type_error(std::string("start: '") + key + "' must be " + what + ", got " +
@@ -256,8 +263,12 @@ lash::State start_state(const lash::Model& model, const py::object& start) {
     st.t = as("time", "a number (s)", 0.0);
     st.step = d.contains("step") ? as("step", "a number (s)", 0.0) : 0.0;
     if (!std::isfinite(st.step) || st.step < 0)
+    {
+      char got[32];  // %g, as the CLI says it (std::to_string wrote -1e-9 as -0.000000)
+      std::snprintf(got, sizeof got, "%g", st.step);
       throw std::invalid_argument("start: 'step' must be a finite step size >= 0 s, got " +
-                                  std::to_string(st.step));
+                                  std::string(got));
+    }
     const auto names = as("names", "a list of names", std::vector<std::string>{});
     const auto y = as("y", "a list of numbers", std::vector<double>{});
     const auto expected = lash::state_names(model, ws);
@@ -517,6 +528,23 @@ py::dict analyze(const CompiledModel& cm, const py::dict& options) {
 
 // --- YAML for models built in code ----------------------------------------------------------
 
+/// A Python string as UTF-8; a lone surrogate ('b\udcff', from bytes decoded with
+/// surrogateescape) is a ValueError naming it (pybind11's cast said "Unable to cast Python
+/// instance to C++ type").
+std::string utf8_of(const py::handle& h) {
+  const py::str s = py::reinterpret_borrow<py::str>(h);
+  try {
+    return s.attr("encode")("utf-8").cast<std::string>();
+  } catch (py::error_already_set& e) {
+    if (!e.matches(PyExc_UnicodeEncodeError)) throw;
+    const long start = e.value().attr("start").cast<long>();
+    const std::string ch = py::repr(s[py::int_(start)]).cast<std::string>();
+    throw py::value_error("model data: " + py::repr(s).cast<std::string>().substr(0, 200) +
+                          " is not valid UTF-8 text (character " + std::to_string(start) + ", " +
+                          ch + "); give text without lone surrogates");
+  }
+}
+
 /// Python data (dict, list, tuple, str, int, float, bool, None) as a YAML node; floats are
 /// written as Python's repr, the shortest text that reads back to the same double.
 YAML::Node to_yaml(const py::handle& h) {
@@ -524,10 +552,10 @@ YAML::Node to_yaml(const py::handle& h) {
   if (py::isinstance<py::bool_>(h)) return YAML::Node(h.cast<bool>() ? "true" : "false");
   if (py::isinstance<py::int_>(h)) return YAML::Node(py::str(h).cast<std::string>());
   if (py::isinstance<py::float_>(h)) return YAML::Node(py::repr(h).cast<std::string>());
-  if (py::isinstance<py::str>(h)) return YAML::Node(h.cast<std::string>());
+  if (py::isinstance<py::str>(h)) return YAML::Node(utf8_of(h));
   if (py::isinstance<py::dict>(h)) {
     YAML::Node n(YAML::NodeType::Map);
-    for (const auto& [k, v] : h.cast<py::dict>()) n[py::str(k).cast<std::string>()] = to_yaml(v);
+    for (const auto& [k, v] : h.cast<py::dict>()) n[utf8_of(py::str(k))] = to_yaml(v);
     return n;
   }
   if (py::isinstance<py::list>(h) || py::isinstance<py::tuple>(h)) {
@@ -657,7 +685,9 @@ PYBIND11_MODULE(_lash, m) {
       for (const auto& d : e.diagnostics())
         diagnostics.append(py::make_tuple(text(d.file), d.line, d.column, text(d.element), text(d.message)));
       py::object type = py::reinterpret_borrow<py::object>(model_error.ptr());
-      py::object instance = type(text(e.what()));
+      std::string message;  // from the diagnostics: what() ends at a NUL one of them holds
+      for (const auto& d : e.diagnostics()) message += d.str() + "\n";
+      py::object instance = type(text(message));
       instance.attr("diagnostics") = diagnostics;
       PyErr_SetObject(model_error.ptr(), instance.ptr());
     } catch (const lash::IoError& e) {

@@ -1004,7 +1004,9 @@ TEST(Cli, TheFiguresProgramReadsTheWholeResultsAndStopsWithTheRun) {
   // ("[s]hare": the pattern does not match the shell that runs pgrep.)
   const Result left = run_lash_raw("pgrep -f '" + dir.string() + "/[s]hare' || echo none");
   EXPECT_NE(left.out.find("none"), std::string::npos) << left.out;
-  EXPECT_EQ(read_summary(out)["status"]["outcome"], "interrupted");
+  // The run had completed: its results are whole, the report is not there.
+  EXPECT_EQ(read_summary(out)["status"]["outcome"], "completed");
+  EXPECT_EQ(read_summary(out)["interrupted_after_run"]["signal"], SIGTERM);
   EXPECT_FALSE(fs::exists(out / "report.html"));  // no half report beside the results
   fs::remove_all(dir);
 }
@@ -1414,6 +1416,22 @@ TEST(Cli, AFolderHoldsOneRunAtATime) {
   fs::remove_all(dir);
 }
 
+TEST(Cli, PeaksOffTheHarmonicsAreCountedOnlyWhereTheSpectrumCanTell) {
+  // Over 4 periods or fewer, two bins reach half-way between the crank's harmonics: no peak
+  // can be off them, and the evidence said "0 strong spectral peaks off the driving harmonics"
+  // of a contact force with its top peaks at 1.5-2.2 kHz against 83 Hz harmonics.
+  const fs::path dir = temp_dir("off_harmonic");
+  ASSERT_EQ(run_lash("run " + example() + " -q -o " + dir.string() +
+                     " --set solver.end_time=0.072 --set solver.output_interval=1e-4").code, 0);
+  Result r = run_lash("analyze " + dir.string() + " --no-lyapunov --discard 3");  // 3 periods
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_EQ(r.out.find("off the driving harmonics"), std::string::npos) << r.out;
+  r = run_lash("analyze " + dir.string() + " --no-lyapunov --discard 0");  // 6 periods
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("off the driving harmonics"), std::string::npos) << r.out;
+  fs::remove_all(dir);
+}
+
 TEST(Cli, AnalysisOptionsAreRangeChecked) {
   const fs::path dir = temp_dir("options");
   ASSERT_EQ(run_lash("run " + example() + " -q -o " + dir.string() + " --set solver.end_time=0.003").code, 0);
@@ -1426,6 +1444,8 @@ TEST(Cli, AnalysisOptionsAreRangeChecked) {
       {"analyze --lyapunov-d0 1e-300", "--lyapunov-d0 1e-300: expected a separation in"},
       {"analyze --lyapunov-method qr", "--lyapunov-method qr: expected variational or two-trajectory"},
       {"analyze --plane slider.x=nan", "value 'nan' is not a finite number"},
+      // Two planes were pooled into one map: a period-1 orbit read as period-2.
+      {"report --plane slider.x=0.1 --plane slider.x=0.12", "--plane: one section plane per analysis (2 given)"},
       {"report --angle-range 0,inf", "--angle-range 0,inf: both angles must be numbers in [0, 360]"},
       // The crank angle is in [0, 360): -30,30 selected 0..30 only; ±1e300 broke the figures.
       {"report --angle-range -30,30", "--angle-range -30,30: both angles must be numbers in [0, 360]"},

@@ -960,6 +960,21 @@ TEST(SweepCli, AFailingRunIsRecordedAndTheRestComplete) {
   fs::remove_all(dir);
 }
 
+TEST(SweepCli, AStudyOfOneLevelIsPlottedOnItsOwnScale) {
+  // One clearance of 0.2 mm was drawn on an axis from -0.5 to 0.5 m, its dot on the 0 tick.
+  const fs::path dir = temp_dir("one_level");
+  const fs::path study = write_study(
+      dir, "set: {solver.end_time: 0.03, solver.output_interval: 1.0e-4}\n"
+           "parameters:\n  joints.rod_slider.clearance: {values: [2.0e-4]}\n"
+           "transient: {periods: 1}\nkeep: {channels: [rod_slider.Fn]}\n");
+  ASSERT_EQ(lash_cmd("sweep " + study.string() + " -q -o " + (dir / "out").string()).code, 0);
+  ASSERT_EQ(lash_cmd("report " + (dir / "out").string()).code, 0);
+  const std::string html = lash::test::read_file((dir / "out" / "study_report.html").string());
+  EXPECT_NE(html.find("text-anchor=\"middle\">0.0002</text>"), std::string::npos);
+  EXPECT_EQ(html.find("text-anchor=\"middle\">0.5</text>"), std::string::npos);
+  fs::remove_all(dir);
+}
+
 TEST(SweepCli, AStudyWhoseEveryRunFailedExitsWithOne) {
   // Nothing to analyse: `lash sweep … && lash report …` must stop. The runs stay recorded, so a
   // resume runs nothing and says the same; a study with one completed run exits 0 (above).
@@ -1154,6 +1169,12 @@ TEST(StudyRun, AValueErrorOfARunNamesTheStudyNotSet) {
   EXPECT_NE(bad.message.find("(a value the study s.yaml sets)"), std::string::npos) << bad.message;
   // At the key that set it (the message named the model file, with no line).
   EXPECT_EQ(bad.message.rfind("s.yaml:6:3: driver 'crank': ", 0), 0u) << bad.message;
+  // A top-level key's level (gravity) too (it pointed at the model file).
+  const StudySpec g = from_text(kShort + "parameters:\n  gravity: {values: [[0, -9.81], [0, abc]]}\n");
+  const RunRecord bad_g = run_study_point(g, study_runs(g)[1]);
+  EXPECT_EQ(bad_g.status, "error");
+  EXPECT_EQ(bad_g.message.rfind("s.yaml:6:3: model: 'gravity' must be a pair of finite numbers", 0), 0u)
+      << bad_g.message;
   // A bad value in `set:` fails every run: refused before any, at its key.
   const std::string set = problems(
       "set: {solver.end_time: 0.024, solver.rtol: 5}\nparameters:\n  drivers.crank.speed_rpm: {values: [5000]}\n");

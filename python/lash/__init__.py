@@ -750,7 +750,7 @@ def simulate(model: Model | str | os.PathLike, t_end: Optional[float] = None, *,
     start continues a run instead, time and all, to t_end (later than the state's time): a
     `Result` (where it ended), its `final_state`, or the path of a final_state.json that
     `lash run` wrote (as `lash run --from`); a state that does not fit the model raises
-    ValueError naming what differs.
+    ValueError naming what differs, a file that cannot be read IoError (an OSError).
 
     output_interval (s) and integrator ("dopri5" or "bdf") override the model's solver
     settings, `overrides` are more "KEY.PATH=VALUE" strings (a single string is one override;

@@ -132,6 +132,8 @@ def _run_analysis(model, keywords: Dict[str, str], *, ideal_twin: bool = True,
             message = f"{name(option)}={given[option]!r}: {m.group(3)}"
     elif message.startswith("section plane "):
         message = f"{name('section_planes')}: {message}"
+    elif message.startswith("--plane: "):
+        message = f"{name('section_planes')}: {message[len('--plane: '):]}"
     raise ValueError(message) from None
 
 
@@ -155,12 +157,13 @@ def analyze(model, *, ideal_twin: bool = True, lyapunov: bool = True,
     Returns a dict: result (status, integrator), period_driver, period (s), verdict (kind,
     evidence, rule, lyapunov_exponent, ...), poincare (kind, points ndarray (n, 2k), times,
     variables, distinct, tolerance; None without a period or plane), spectra {channel:
-    {frequency Hz, amplitude}}, statistics {channel: {min, max, peak, rms, crest, ...}},
+    {frequency Hz, amplitude}, reduced to at most 2000 bins as spectra() says}, statistics {channel: {min, max, peak, rms, crest, ...}},
     clearance_joints {joint: contact modes}, lyapunov (None when not estimated), ideal_twin
     {channel: comparison} (None without). Releases the GIL; Ctrl-C raises KeyboardInterrupt.
     `section_planes` and `fft_channels` are lists of strings (a single string is one plane or
-    channel). Raises TypeError for an option of the wrong type, ValueError for one out of range
-    or naming what does not exist, each naming the argument."""
+    channel); one plane at most (the crossings of several would be pooled into one map).
+    Raises TypeError for an option of the wrong type, ValueError for one out of range or naming
+    what does not exist, each naming the argument."""
     return _run_analysis(model, {}, ideal_twin=ideal_twin, lyapunov=lyapunov,
                          poincare_driver=poincare_driver, section_planes=section_planes,
                          discard_periods=discard_periods, fft_channels=fft_channels,
@@ -189,7 +192,10 @@ def verdict(model, **options: Any) -> Dict[str, Any]:
 
 def spectra(model, channels: Sequence[str] = (), discard_periods: int = 1) -> Dict[str, Any]:
     """Amplitude spectra (Hann window, after `discard_periods` periods) of `channels` of
-    `model`, as analyze() computes them: {channel: {frequency (Hz), amplitude, ...}}."""
+    `model`, as analyze() computes them: {channel: {frequency (Hz), amplitude, ...}}. Reduced for
+    plotting as the report's are: a spectrum of more than 2000 bins keeps the smallest and largest
+    amplitude of each of 1000 groups of neighbouring bins (so its frequencies are not evenly
+    spaced, and every peak stays); spectrum(result, channel) gives every bin of a Result."""
     return _run_analysis(model, {"fft_channels": "channels"}, ideal_twin=False, lyapunov=False,
                          fft_channels=channels, discard_periods=discard_periods)["spectra"]
 

@@ -259,7 +259,7 @@ int main(int argc, char** argv) {
                     "exponent from a pair of runs, a cross-check)");
     sub->add_option("--plane", planes,
                     "Event-based Poincaré section instead of the stroboscopic one: "
-                    "<body>.<x|y|phi|vx|vy|omega>=VALUE[,down], e.g. slider.vx=0,down");
+                    "<body>.<x|y|phi|vx|vy|omega>=VALUE[,down], e.g. slider.vx=0,down (one plane)");
     sub->add_option("--discard", discard_periods, "Transient periods to discard (default 1)");
     sub->add_option("--lyapunov-d0", lyapunov_d0,
                     "Separation of the two trajectories (--lyapunov-method two-trajectory), m "

@@ -82,7 +82,10 @@ std::string plot(const std::string& title, const std::string& xlabel, const std:
   for (const auto& [x, y] : p) {
     x0 = std::min(x0, x), x1 = std::max(x1, x), y0 = std::min(y0, y), y1 = std::max(y1, y);
   }
-  if (x1 == x0) x0 -= 0.5 * (std::abs(x0) + 1), x1 += 0.5 * (std::abs(x1) + 1);
+  if (x1 == x0) {  // one value: an axis around it on its own scale (±0.5 put 2e-4 on the 0 tick)
+    const double half = log_x || x0 == 0.0 ? 0.5 : 0.5 * std::abs(x0);
+    x0 -= half, x1 += half;
+  }
   if (y1 == y0) y0 -= 0.5 * (std::abs(y0) + 1e-12), y1 += 0.5 * (std::abs(y1) + 1e-12);
   const double pad = 0.04 * (y1 - y0);
   y0 -= pad, y1 += pad;

@@ -1649,9 +1649,10 @@ LoadedModel load_model_text(const std::string& text, const std::string& filename
                                  "); save the model file with UTF-8 encoding"}});
   for (const auto& o : overrides)
     if (auto bad = first_invalid_utf8(o))
-      throw ModelError({{"--set", 0, 0, "", "not UTF-8 text (byte " + bad->byte + ") in '" +
-                                                 std::string(o.begin(), o.begin() + bad->offset) +
-                                                 "...'"}});
+      throw ModelError({{"--set", 0, 0, "",
+                         (bad->byte == "0x00" ? std::string("a NUL byte")
+                                              : "not UTF-8 text (byte " + bad->byte + ")") +
+                             " in '" + std::string(o.begin(), o.begin() + bad->offset) + "...'"}});
   YAML::Node root;
   try {
     root = YAML::Load(text);

@@ -52,6 +52,8 @@ State read_state(const std::string& path, const Model& model, const Workspace& w
   std::string text;
   try {
     text = read_input_file(path, kMaxModelFileBytes);
+  } catch (const IoError&) {  // cannot be read (no such file, no permission): as it is
+    throw;
   } catch (const std::exception& e) {
     throw std::runtime_error(e.what());
   }

@@ -450,12 +450,15 @@ class SectionInterpolator {
   std::vector<std::pair<double, std::vector<double>>> rows_;
 };
 
-/// Strong spectral peaks (> 10% of the largest) that are not within two bins of a harmonic of f0.
+/// Strong spectral peaks (> 10% of the largest) that are not within two bins of a harmonic of f0;
+/// -1 (not counted) where no frequency is: two bins reach half-way between harmonics (fewer
+/// than about 4 periods analysed), so "0 peaks off the harmonics" would say nothing.
 int non_harmonic_peaks(const Spectrum& s, double f0) {
   if (s.amplitude.size() < 3 || !(f0 > 0)) return -1;
+  const double df = s.frequency[1] - s.frequency[0];
+  if (2 * df >= 0.5 * f0 * (1 - 1e-9)) return -1;  // (exactly 4 periods: none either)
   double top = 0;
   for (size_t k = 1; k < s.amplitude.size(); ++k) top = std::max(top, s.amplitude[k]);
-  const double df = s.frequency[1] - s.frequency[0];
   int n = 0;
   for (size_t k = 1; k + 1 < s.amplitude.size(); ++k) {
     const double a = s.amplitude[k];
@@ -786,6 +789,13 @@ Plan plan_analysis(const Model& model, const AnalysisOptions& o) {
   }
   for (const auto& f : p.fft)
     if (!known(f)) throw std::invalid_argument("--fft " + f + ": no such channel");
+  // One plane: the crossings of several would be pooled into one map, whose distinct points
+  // and period would then count planes (a period-1 orbit read as period-2 on two planes).
+  if (o.section_planes.size() > 1)
+    throw std::invalid_argument("--plane: one section plane per analysis (" +
+                                std::to_string(o.section_planes.size()) +
+                                " given): the crossings of several would be pooled into one "
+                                "Poincaré map; analyse each plane on its own");
   for (const auto& spec : o.section_planes) p.planes.push_back(parse_section_plane(model, spec));
   // Phase portraits: the requested pairs, else each clearance joint's ex–ey and δ–δ̇.
   if (o.phase.empty()) {

@@ -708,6 +708,8 @@ def test_analysis_options_are_checked_and_named_as_python_arguments():
         (lambda: A.analyze(model, stats_window=(0.5, 0.1)), r"^stats_window=\(0.5, 0.1\): T0 must be less than T1$"),
         (lambda: A.poincare(model, driver="crankk"), r"^driver='crankk': no revolute driver"),
         (lambda: A.poincare(model, planes="slider.vq=0"), r"^planes: section plane 'slider.vq=0'"),
+        # Two planes were pooled into one map (a period-1 orbit read as period-2).
+        (lambda: A.poincare(model, planes=["slider.x=0.1", "slider.x=0.12"]), r"^planes: one section plane per analysis \(2 given\)"),
         (lambda: A.count_distinct([1, 2, 3], 0.1), r"^points\[0\]: expected a 1-D sequence"),
         (lambda: A.count_distinct(np.zeros((2, 2, 2)), 0.1), r"^points\[0\]: expected a 1-D sequence of numbers, got an array of shape \(2, 2\)$"),
         (lambda: A.classify_motion(0.0, 0.01, 2**40, 4), r"^distinct: expected a whole number between"),
@@ -904,10 +906,31 @@ def test_a_run_continues_from_a_result_or_a_state_file(tmp_path):
                                     ("step", float("nan"), ValueError, "'step' must be a finite"),
                                     ("y", [0.0], ValueError, "'y' has 1 entries and 'names' 22"),
                                     ("modes", {"rod_slider": True, "pin": False}, ValueError,
-                                     "'pin' in 'modes' is no clearance joint")]:
+                                     "'pin' in 'modes' is no clearance joint"),
+                                    # Said as -0.000000 (which looks allowed), and a bool taken as 1 s.
+                                    ("step", -1e-9, ValueError, "'step' must be a finite step size >= 0 s, got -1e-09"),
+                                    ("step", True, TypeError, "'step' must be a number (s), got bool")]:
         state = dict(half.final_state, **{key: value})
         with pytest.raises(error, match=f"^start: {re.escape(said)}"):
             lash.simulate(FLORES, t_end=0.012, start=state)
+
+
+def test_a_missing_state_file_is_an_oserror_and_odd_text_is_named(tmp_path):
+    # start='nope.json' raised ValueError (kept for a state that does not fit the model).
+    with pytest.raises(lash.IoError, match="nope.json: cannot open"):
+        lash.simulate(FLORES, t_end=0.012, start=str(tmp_path / "nope.json"))
+    # A lone surrogate in a model built in code: pybind11's "Unable to cast Python instance".
+    with pytest.raises(ValueError, match=r"not valid UTF-8 text \(character 1, '\\udcff'\)"):
+        lash.Model.new("x").add_body("b\udcff", mass=1, inertia=1).text()
+    # A NUL in a key: the message went on past it (str() ended at the NUL); in an override it
+    # is a NUL byte, not "not UTF-8".
+    m = lash.Model(data={"name": "x", "bodies": {"b": {"mass": 1, "inertia": 1}},
+                         "solver": {"end_time": 0.01}, "a\0b": 1})
+    with pytest.raises(lash.ModelError) as err:
+        m.check()
+    assert "unknown key 'a\0b', expected one of" in str(err.value), str(err.value)
+    with pytest.raises(lash.ModelError, match="a NUL byte in"):
+        m.set("solver.a\0b", 1).check()
 
 
 def test_modes_as_lash_modes_computes_them():
