@@ -1008,6 +1008,24 @@ TEST(Cli, TheFiguresProgramReadsTheWholeResultsAndStopsWithTheRun) {
   EXPECT_EQ(read_summary(out)["status"]["outcome"], "completed");
   EXPECT_EQ(read_summary(out)["interrupted_after_run"]["signal"], SIGTERM);
   EXPECT_FALSE(fs::exists(out / "report.html"));  // no half report beside the results
+  // The same after a run that failed (a load's expression at 1 ms): exit 130 and the outcome
+  // failed, said (it exited 1 with no word of the signal or of the report it left out).
+  const Result f = run_lash_raw(
+      "LASH_TEST_FIGURES_WAIT=1 " + lash + " run " + example() + " -q --report -o " + out.string() +
+      " --set solver.end_time=0.002 --set 'loads={push: {type: force, point: slider.O, fx: "
+      "\"sqrt(0.001 - time)\"}}' 2>&1 & pid=$!; i=0; while [ ! -e " +
+      (out / "figures" / "started").string() +
+      " ] && [ $i -lt 3000 ]; do sleep 0.1; i=$((i+1)); done; kill -TERM $pid; wait $pid; "
+      "echo \"rc=$?\"");
+  EXPECT_NE(f.out.find("rc=130"), std::string::npos) << f.out;
+  EXPECT_NE(f.out.find("error: simulation stopped at t = 0.001"), std::string::npos) << f.out;
+  EXPECT_NE(f.out.find("interrupted by signal 15 after the run, during its analyses or report"),
+            std::string::npos) << f.out;
+  const nlohmann::json failed = read_summary(out);
+  EXPECT_EQ(failed["status"]["outcome"], "failed");
+  EXPECT_EQ(failed["interrupted_after_run"]["signal"], SIGTERM);
+  EXPECT_FALSE(failed.contains("verdict"));
+  EXPECT_FALSE(fs::exists(out / "report.html"));
   fs::remove_all(dir);
 }
 
@@ -1713,7 +1731,7 @@ TEST(Cli, SignalsAfterTheRunAndIgnoredSignals) {
     EXPECT_EQ(late["status"]["time"].get<double>(), 0.3);
     EXPECT_EQ(late["interrupted_after_run"]["signal"], SIGTERM) << late.dump();
     EXPECT_FALSE(late.contains("verdict")) << "a verdict from analyses cut short";
-    EXPECT_NE(r.out.find("are whole; `lash report"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("are as the run left them; `lash report"), std::string::npos) << r.out;
     const Result analysed = run_lash("analyze " + dir.string());
     EXPECT_EQ(analysed.code, 0) << analysed.out;
     const fs::path more = temp_dir("late_signal_more");

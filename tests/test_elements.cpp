@@ -511,10 +511,13 @@ TEST(State, AClearanceJointsPartThatCannotBeIsRefusedAndAChangedGapIsSaid) {
     ASSERT_EQ(said.size(), 1u);
     EXPECT_EQ(said[0].find("the continued state names no model that wrote it"), 0u) << said[0];
     EXPECT_FALSE(saved.file_names_no_model);
+    // A state made in memory (a study's continuation) names no model and is not said.
+    State in_memory = saved;
+    in_memory.model.clear();
+    EXPECT_TRUE(resume_warnings(next, wn, in_memory).empty());
     for (const auto& [key, value, expected] :
          {std::tuple<const char*, nlohmann::json, const char*>{
               "model", 5, "'model' must be the name of the model that wrote the state, got 5"},
-          {"model", "", "'model' must be the name of the model that wrote the state"},
           {"modes", nullptr, "'modes' is missing"},
           {"modes", nlohmann::json::array({1}), "'modes' must map each clearance joint"}}) {
       nlohmann::json bad = j;

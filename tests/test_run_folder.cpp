@@ -262,9 +262,12 @@ TEST(RunFolder, NonFiniteTimesAndFilesThatAreNotRegularAreRefused) {
   for (const auto& [path, value, expected] :
        {std::tuple<const char*, nlohmann::json, const char*>{"/status", "ok", "status is \"ok\", expected an object"},
         {"/status/outcome", 5, "status.outcome is 5, expected text"},
-        {"/output/channels", 5, "output.channels is 5, expected a list of names"},
+        {"/output/channels", 5, "output.channels is 5, expected a list of texts"},
         {"/integrator/steps", "many", "integrator.steps is \"many\", expected a number"},
-        {"/channels/slider.x/t_max", nullptr, "channels.slider.x.t_max is null, expected a number"}}) {
+        {"/channels/slider.x/t_max", nullptr, "channels.slider.x.t_max is null, expected a number"},
+        {"/max_constraint_violation", "x", "max_constraint_violation is \"x\", expected a number"},
+        {"/integrator/projections", "x", "integrator.projections is \"x\", expected a number"},
+        {"/warnings", nlohmann::json::array({1}), "warnings is [1], expected a list of texts"}}) {
     nlohmann::json j = nlohmann::json::parse(summary_text);
     j[nlohmann::json::json_pointer(path)] = value;
     std::ofstream(dir / "summary.json") << j.dump();

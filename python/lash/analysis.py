@@ -176,7 +176,7 @@ def poincare(model, *, driver: str = "", planes: Sequence[str] = (),
              discard_periods: int = 1) -> Optional[Dict[str, Any]]:
     """Poincare sections of `model` (Model, path or Result): stroboscopic once per period of
     `driver` (default: the first constant-speed rotary driver), or event-based on `planes`
-    ("<body>.<x|y|phi|vx|vy|omega>=VALUE[,down]"). Returns analyze()'s "poincare" dict (points
+    ("<body>.<x|y|phi|vx|vy|omega>=VALUE[,down]"; one plane at most). Returns analyze()'s "poincare" dict (points
     (n, 2k) array of each clearance joint's eccentricity (ex, ey) in m, times, distinct, ...),
     or None when there is neither a period nor a plane. Runs without ideal twin and Lyapunov."""
     return _run_analysis(model, {"poincare_driver": "driver", "section_planes": "planes"},

@@ -713,17 +713,26 @@ int main(int argc, char** argv) {
       report_failed = true;
     }
   }
-  // The run reached end_time and the signal came during the analyses or the report: the
-  // results are whole (outcome completed, so `lash report` and `analyze` take the folder and
-  // `--from` continues it), the report and the verdict (which may rest on analyses cut short)
-  // are left out, and lash exits as interrupted.
-  const int signal_after_run = result.status.ok ? g_interrupt.load() : 0;
+  // The run ended by itself (it reached end_time, or failed) with its files written, and the
+  // signal came after it, during the analyses, the report or the closing: the outcome stays the
+  // run's (a completed run's folder can be reported, analysed and continued with --from), the
+  // report and the verdict (which may rest on analyses cut short) are left out, and lash exits
+  // as interrupted.
+  const int signal_after_run =
+      (outcome == lash::RunOutcome::completed || outcome == lash::RunOutcome::failed) &&
+              writer->stop_reason().empty()
+          ? g_interrupt.load()
+          : 0;
   if (signal_after_run != 0) {
     if (with_report) lash::remove_report(out_dir);  // it may have finished just before the signal
-    writer->add_to_summary("interrupted_after_run",
-                           {{"signal", signal_after_run},
-                            {"message", "a signal during the analyses or the report: the results "
-                                        "are whole, the report and the verdict were not written"}});
+    writer->add_to_summary(
+        "interrupted_after_run",
+        {{"signal", signal_after_run},
+         {"message", with_report ? "a signal during the analyses or the report, after the run: "
+                                   "its results are as it left them; the report and the verdict "
+                                   "were not written"
+                                 : "a signal as the run closed its files: its results are as it "
+                                   "left them"}});
   } else if (with_report)
     writer->add_to_summary("verdict", {{"class", ra.verdict.kind},
                                        {"evidence", ra.verdict.evidence},
@@ -747,13 +756,9 @@ int main(int argc, char** argv) {
   }
   int code = exit_code(status.outcome);
   if (report_failed && code == kExitOk) code = kExitIo;
-  if (signal_after_run != 0) {
-    std::cerr << "\ninterrupted by signal " << signal_after_run << " after the run, during its "
-              << (with_report ? "analyses or report" : "closing") << ": its results in " << out_dir
-              << "/ are whole" << (with_report ? "; `lash report " + out_dir + "` makes the report" : "")
-              << "\n";
-    return exit_code(lash::RunOutcome::interrupted);
-  }
+  const bool said_after_run = signal_after_run != 0 && (status.outcome == lash::RunOutcome::completed ||
+                                                         status.outcome == lash::RunOutcome::failed);
+  if (said_after_run) code = kExitInterrupted;
   auto print_notes = [&](std::ostream& os) {
     for (const auto& line : report_notes) os << "report: " << line << "\n";
   };
@@ -787,5 +792,10 @@ int main(int argc, char** argv) {
                 << "\nresults up to that time are in " << out_dir << "/\n";
       break;
   }
+  if (said_after_run)
+    std::cerr << "\ninterrupted by signal " << signal_after_run << " after the run, "
+              << (with_report ? "during its analyses or report" : "as it closed its files")
+              << ": its results in " << out_dir << "/ are as the run left them"
+              << (with_report ? "; `lash report " + out_dir + "` makes the report" : "") << "\n";
   return code;
 }

@@ -700,7 +700,7 @@ std::vector<std::string> resume_warnings(const Model& model, Workspace& ws, cons
     out.push_back("the continued state names no model that wrote it (its 'model' is missing: "
                   "a file edited by hand?); its coordinates match this model's by name and "
                   "number, so it runs; check that it is the state you meant");
-  else if (state.model != model.name)
+  else if (!state.model.empty() && state.model != model.name)  // (a state made in memory: "")
     out.push_back("the continued state was written by model '" + state.model + "', and this is '" +
                   model.name + "': its coordinates match this model's by name and number, so it "
                   "runs; check that it is the state you meant");

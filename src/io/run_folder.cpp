@@ -108,7 +108,7 @@ T field(const json& parent, const std::string& path, const std::string& name) {
   } else {
     static_assert(std::is_same_v<T, std::vector<std::string>>);
     if (!v.is_array() || !std::all_of(v.begin(), v.end(), [](const json& e) { return e.is_string(); }))
-      wrong(got + ", expected a list of names");
+      wrong(got + ", expected a list of texts");
   }
   return v.get<T>();
 }
@@ -220,13 +220,13 @@ RecordedRun read_run_folder(const std::string& dir, const Model& model) {
     run.result.stats.rejected_steps = count(in, "integrator.rejected_steps");
     run.result.stats.rhs_evaluations = count(in, "integrator.rhs_evaluations");
     run.result.stats.events = count(in, "integrator.events");
-    run.result.stats.projections = in.value("projections", 0L);
+    run.result.stats.projections = in.contains("projections") ? count(in, "integrator.projections") : 0;
     run.result.wall_seconds = field<double>(in, summary_path, "integrator.wall_seconds");
     run.result.outputs = count(in, "integrator.outputs");
     run.result.missed_events = count(in, "integrator.missed_events");
-    run.result.max_constraint_violation = sum.at("max_constraint_violation").get<double>();
+    run.result.max_constraint_violation = field<double>(sum, summary_path, "max_constraint_violation");
     if (sum.contains("warnings"))
-      run.result.warnings = sum["warnings"].get<std::vector<std::string>>();
+      run.result.warnings = field<std::vector<std::string>>(sum, summary_path, "warnings");
     // Every channel's exact extrema over the run (tracked between outputs while it ran).
     if (sum.contains("channels") && sum["channels"].is_object())
       for (const auto& [name, c] : sum["channels"].items()) {

@@ -105,7 +105,7 @@ State read_state(const std::string& path, const Model& model, const Workspace& w
       throw fail("'step' must be a number (s), got " + j.at("step").dump().substr(0, 40));
     st.step = j.value("step", 0.0);
     if (j.contains("model")) {  // the name of the model that wrote it (a warning if another)
-      if (!j.at("model").is_string() || j.at("model").get<std::string>().empty())
+      if (!j.at("model").is_string())  // ("" is the name of a model named "")
         throw fail("'model' must be the name of the model that wrote the state, got " +
                    j.at("model").dump().substr(0, 40));
       st.model = j.at("model").get<std::string>();

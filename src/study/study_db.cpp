@@ -252,6 +252,9 @@ StudyDb::StudyDb(const std::string& path, const StudySpec& spec, int total_runs)
             (names.empty() ? "" : " (" + names + ")") +
             "; resuming would mix two models: choose another output folder");
       }
+      // A database begun by an earlier lash has no index of series by run, which add() reads
+      // (each resumed run would scan every series row).
+      exec("CREATE INDEX IF NOT EXISTS series_run ON series(run)");
     }
   } catch (...) {
     sqlite3_close(db_);

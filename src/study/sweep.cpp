@@ -141,8 +141,11 @@ Diagnostics study_diagnostics(const std::vector<Diagnostic>& in, const StudySpec
       const std::pair<int, int>* mark = nullptr;
       int found = 0;
       for (const auto& [path, m] : spec.path_marks) {
-        // A top-level key (gravity) is named itself ("'gravity' must be a pair ...").
-        bool all = path.find('.') != std::string::npos || names(path);
+        // A top-level value (gravity, name, description; not a section such as `ground` or
+        // `solver`, whose keys set below it are named instead) is named itself ("'gravity'
+        // must be a pair ...").
+        const bool leaf = path == "gravity" || path == "name" || path == "description";
+        bool all = path.find('.') != std::string::npos || (leaf && names(path));
         for (size_t a = path.find('.'); all && a != std::string::npos;) {
           const size_t b = path.find('.', a + 1);
           all = names(path.substr(a + 1, b == std::string::npos ? std::string::npos : b - a - 1));
