@@ -410,6 +410,39 @@ solver: {end_time: 1.0, output_interval: 0.001}
   EXPECT_TRUE(drivers_out_of_reach(m, ws, 0.0, y).empty());
 }
 
+TEST(Failure, ASmallMechanismDrivenPastItsReachStopsThere) {
+  // A 0.1 mm crank and 0.3 mm rod with the slider driven outward at 0.3 mm/s: its reach, 0.4 mm,
+  // is met at t = 0.3905 s. Against an absolute 1e-3 m it ran on to 0.62 s (DOPRI5) and 0.57 s
+  // (BDF), the crank turning 2 700 times with the joints 13 mm apart; a tenth of the
+  // mechanism's size (3e-5 m) stops it at the reach.
+  const std::string yaml = R"Y(
+ground: {markers: {O: [0, 0]}}
+bodies:
+  crank: {mass: 1, inertia: 1e-8, position: [0.0, -5e-05], angle: -1.5707963267948966, markers: {O: [-5e-05, 0.0], A: [5e-05, 0.0]}}
+  rod: {mass: 1, inertia: 7.5e-9, position: [0.0001414213562373095, -5e-05], angle: 0.339836909454122, markers: {A: [-0.00015, 0.0], B: [0.00015, 0.0]}}
+  slider: {mass: 1, inertia: 1e-8, position: [0.000282842712474619, 0.0], markers: {O: [0, 0]}}
+joints:
+  crank_pivot: {type: revolute, journal: crank.O, bearing: ground.O}
+  crank_rod: {type: revolute, journal: crank.A, bearing: rod.A}
+  rod_slider: {type: revolute, journal: rod.B, bearing: slider.O}
+  guide: {type: translational, guide: ground.O, slider: slider.O, axis: [1, 0]}
+drivers:
+  ram: {joint: guide, motion: "0.0003*time"}
+solver: {end_time: 2, output_interval: 0.001}
+)Y";
+  const Model m = load_model_text(yaml, "test.yaml", {}).model;
+  EXPECT_NEAR(run_violation_limit(m), 0.1 * std::hypot(2.828427e-4, 1e-4), 1e-10);
+  for (const char* integrator : {"dopri5", "bdf"}) {
+    SCOPED_TRACE(integrator);
+    const SimRun r = run_text(yaml, {std::string("solver.integrator=") + integrator});
+    const RunStatus& st = r.result.status;
+    ASSERT_FALSE(st.ok);
+    EXPECT_EQ(st.element, "ram") << st.message;
+    EXPECT_GT(st.t, 0.3905);
+    EXPECT_LT(st.t, 0.41) << st.message;
+  }
+}
+
 TEST(Failure, PulledApartNamesADriverOnlyWhereTheJointsCloseWithoutIt) {
   // drivers_out_of_reach tells a driver past the mechanism's reach from joints that came apart
   // where they could have closed. A slider-crank (crank 0.1 m, rod 0.3 m) whose slider is driven

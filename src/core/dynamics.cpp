@@ -389,9 +389,25 @@ void update_kin(Workspace& ws, const double* y) {
   for (BodyKin& k : ws.kin) read_kin(k, ws.nq, y, ws.flexible_state.data());
 }
 
+double run_violation_limit(const Model& model) {
+  Vec2 lo = Vec2::Constant(INFINITY), hi = Vec2::Constant(-INFINITY);
+  auto add = [&](const Vec2& p) { lo = lo.cwiseMin(p), hi = hi.cwiseMax(p); };
+  auto point = [&](const PointRef& p) {
+    if (p.body == kGround) return p.s;
+    const Body& b = model.bodies[p.body];
+    return Vec2(b.r0 + rotation(b.phi0) * p.s);
+  };
+  for (const Body& b : model.bodies) add(b.r0);
+  for (const Joint& j : model.joints) add(point(j.a)), add(point(j.b));
+  const double size = (hi - lo).norm();
+  return std::isfinite(size) && size > 0.0 ? std::min(kRunViolationLimit, kRunViolationShare * size)
+                                           : kRunViolationLimit;
+}
+
 Workspace::Workspace(const Model& model) {
   if (!model.finalized)
     throw std::invalid_argument("Workspace: the model has not been finalized (lash::finalize)");
+  violation_limit = run_violation_limit(model);
   nb = static_cast<int>(model.bodies.size());
   // Coordinate blocks: one per body, sized by its kind.
   for (const Body& b : model.bodies) {

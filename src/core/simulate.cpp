@@ -171,7 +171,7 @@ RunStatus through_bearing(const Model& model, const Workspace& ws, int k, double
   return {false, t, j.name, s.str()};
 }
 
-/// The joints no longer hold: |Φ| beyond kRunViolationLimit. A driver that asks for what the
+/// The joints no longer hold: |Φ| beyond ws.violation_limit. A driver that asks for what the
 /// mechanism cannot do (drivers_out_of_reach: a motion past its reach, or on through a position
 /// where it locks) names the element; otherwise the row worst off. ws holds the evaluation at
 /// (t, y).
@@ -188,7 +188,7 @@ RunStatus pulled_apart(const Model& model, Workspace& ws, double t, const Eigen:
     for (size_t k = 1; k < drivers.size(); ++k) s << ", driver '" << model.drivers[drivers[k]].name << "'";
     s << ": the mechanism cannot follow " << (drivers.size() > 1 ? "them" : "it") << " at t = "
       << t << " s: " << e.what << " is pulled apart (constraint residual " << worst
-      << " m or rad, beyond the " << kRunViolationLimit
+      << " m or rad, beyond the " << ws.violation_limit
       << " a run allows), and the joints close again without "
       << (drivers.size() > 1 ? "any one of these drivers" : "this driver")
       << ": it prescribes a motion past the mechanism's reach, or on through a position where "
@@ -196,7 +196,7 @@ RunStatus pulled_apart(const Model& model, Workspace& ws, double t, const Eigen:
     return {false, t, first, s.str()};
   }
   s << e.what << ": pulled apart: its constraint residual is " << worst << " (m or rad) at t = "
-    << t << " s, beyond the " << kRunViolationLimit
+    << t << " s, beyond the " << ws.violation_limit
     << " a run allows: the mechanism cannot follow its joints and drivers here (a driver "
        "forcing a locked or singular position, a loop that does not close, or steps too "
        "large for the constraint stabilization: a smaller solver.rtol than "
@@ -378,8 +378,8 @@ Simulator::Simulator(const Model& model, Workspace& ws, std::vector<SectionPlane
   // residual at 1e-2). The last right-hand side's residual screens each step (DOPRI5's is the
   // step's end); the step's end itself decides.
   problem.halt = [this](double t, const Eigen::VectorXd& yy) {
-    pulled_apart_ = rhs_violation_ > kRunViolationLimit &&
-                    constraint_residual(model_, ws_, t, yy.data()) > kRunViolationLimit;
+    pulled_apart_ = rhs_violation_ > ws_.violation_limit &&
+                    constraint_residual(model_, ws_, t, yy.data()) > ws_.violation_limit;
     return pulled_apart_;
   };
   IntegratorOptions opt{s.rtol, s.atol, s.max_step, s.max_steps};
@@ -883,7 +883,7 @@ RunResult simulate(const Model& model, Workspace& ws, Observer& observer,
       observer.output(t, y, ws);
     }
     ++result.outputs;
-    if (ws.constraint_violation > kRunViolationLimit) {
+    if (ws.constraint_violation > ws.violation_limit) {
       result.status = pulled_apart(model, ws, t, y);
       return false;
     }

@@ -171,7 +171,7 @@ class Simulator {
   long projections_ = 0;        ///< states moved onto the constraints there
   long through_events_ = 0;     ///< located journals through their bearings (not contact events)
   /// The largest constraint residual of the integrator's last right-hand side (at a DOPRI5
-  /// step's end, its state), and whether a step's end was found beyond kRunViolationLimit.
+  /// step's end, its state), and whether a step's end was found beyond the workspace's violation_limit.
   double rhs_violation_ = 0.0;
   bool pulled_apart_ = false;
   /// The event functions of the integrated problem: the clearance joints' contact functions,
