@@ -61,6 +61,10 @@ install(TARGETS ${LASH_PROGRAMS} RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
 install(DIRECTORY src/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/lash
         FILES_MATCHING PATTERN "*.hpp" PATTERN "cli" EXCLUDE)
 install(FILES tools/lash_figures.py DESTINATION ${CMAKE_INSTALL_DATADIR}/lash)
+# The documentation the program's messages cite (docs/model-format.md, ...), laid out as in the
+# source so that README.md's links hold: share/doc/lash/README.md and share/doc/lash/docs/.
+install(FILES README.md DESTINATION ${CMAKE_INSTALL_DATADIR}/doc/lash)
+install(DIRECTORY docs/ DESTINATION ${CMAKE_INSTALL_DATADIR}/doc/lash/docs)
 install(EXPORT LashTargets NAMESPACE Lash:: DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/Lash)
 configure_package_config_file(cmake/LashConfig.cmake.in
   ${PROJECT_BINARY_DIR}/LashConfig.cmake INSTALL_DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/Lash)

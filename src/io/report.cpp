@@ -145,8 +145,12 @@ std::string figures_script() {
     std::error_code ec;
     const fs::path dir = fs::canonical(b, ec).parent_path();
     if (ec) continue;
-    // P/bin/lash or build/tests/test_x: ../share; build/lash (the build tree's top): share.
-    for (const fs::path& share : {dir.parent_path() / "share", dir / "share"}) {
+    // P/bin/lash or build/tests/test_x: ../share; build/lash (the build tree's top): share;
+    // the installed library or program: its install folder's path to the data folder
+    // (P/lib/x86_64-linux-gnu/liblash.so: ../../share).
+    for (const fs::path& share : {dir.parent_path() / "share", dir / "share",
+                                  (dir / LASH_LIB_TO_DATA).lexically_normal(),
+                                  (dir / LASH_BIN_TO_DATA).lexically_normal()}) {
       const fs::path script = share / "lash" / "lash_figures.py";
       if (fs::is_regular_file(script, ec)) return script.string();
     }

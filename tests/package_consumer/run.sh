@@ -9,7 +9,8 @@ trap 'rm -rf "$work"' EXIT
 prefix=$work/prefix
 cmake --install "$build" --prefix "$prefix" >/dev/null
 for f in include/lash/core/simulate.hpp include/lash/io/model_loader.hpp bin/lash \
-         share/lash/lash_figures.py lib/cmake/Lash/LashConfig.cmake \
+         share/lash/lash_figures.py share/doc/lash/README.md share/doc/lash/docs/model-format.md \
+         share/doc/lash/docs/studies.md lib/cmake/Lash/LashConfig.cmake \
          lib/cmake/Lash/LashConfigVersion.cmake; do
   [ -f "$prefix/$f" ] || { echo "not installed: $f" >&2; exit 1; }
 done
