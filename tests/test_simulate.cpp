@@ -443,6 +443,38 @@ solver: {end_time: 2, output_interval: 0.001}
   }
 }
 
+TEST(Failure, AMechanismLockedAtASingularPositionIsRefusedAtTheStart) {
+  // A point mass on a rail, held by a 1 m rod from (0, 1) that touches the rail at x = 0 only:
+  // free to first order along the rail, locked to second. The rod was called redundant and
+  // dropped, the bob slid off with the rod stretched, and the run failed at 0.3 s blaming the
+  // stabilization.
+  const std::string yaml = R"Y(
+gravity: [1, -9.81]
+ground: {markers: {O: [0, 0], C: [0, 1]}}
+bodies:
+  bob: {mass: 1, position: [0, 0]}
+joints:
+  rail: {type: translational, guide: ground.O, slider: bob, axis: [1, 0]}
+  rod: {type: distance, from: ground.C, to: bob, length: 1}
+solver: {end_time: 1, output_interval: 0.01}
+)Y";
+  const Model m = load_model_text(yaml, "test.yaml", {}).model;
+  Workspace ws(m);
+  try {
+    initial_state(m, ws);
+    ADD_FAILURE() << "assembled";
+  } catch (const std::runtime_error& e) {
+    EXPECT_EQ(std::string(e.what()).find("joint 'rod': its equations are dependent on the other "
+                                         "joints'"), 0u) << e.what();
+    EXPECT_NE(std::string(e.what()).find("locked at a singular position"), std::string::npos);
+  }
+  // Off that position (the rod's top 0.2 m along, so it meets the rail at a slant) the same
+  // mechanism is simply locked and runs, the bob held still.
+  const SimRun r = run_text(yaml, {"ground.markers.C=[0.2, 1]", "joints.rod.length=1.0198039027185568"});
+  ASSERT_TRUE(r.result.status.ok) << r.result.status.message;
+  EXPECT_LT(r.result.max_constraint_violation, 1e-9);
+}
+
 TEST(Failure, PulledApartNamesADriverOnlyWhereTheJointsCloseWithoutIt) {
   // drivers_out_of_reach tells a driver past the mechanism's reach from joints that came apart
   // where they could have closed. A slider-crank (crank 0.1 m, rod 0.3 m) whose slider is driven

@@ -190,6 +190,26 @@ JacobianPattern jacobian_pattern(const Model& model, Workspace& ws, double t, co
       for (int r : ws.row_of_driver) drivers_kept = drivers_kept && near[r];
       driver_kept_nearby = driver_kept_nearby || drivers_kept;
     }
+    if (probes > 0 && nearby.empty() && !driver_dropped) {
+      // No move along the joints' first-order motions comes back onto the joints: they are no
+      // motions (a rod tangent to the guide its end slides on: free to first order, held to
+      // second). The mechanism is locked at a singular position, where holding it takes
+      // unbounded reactions; counting a row redundant there dropped a joint that holds it (the
+      // bob slid off with the rod stretched, and the run failed blaming the stabilization).
+      std::string dependent;
+      for (int r = 0; r < ws.m; ++r)
+        if (!pattern.keep[r]) {
+          const std::string what = constraint_row_element(model, ws, r).what;
+          if (dependent.find(what) == std::string::npos)
+            dependent += (dependent.empty() ? "" : ", ") + what;
+        }
+      throw std::runtime_error(
+          dependent + ": its equations are dependent on the other joints' at the starting "
+          "configuration, and no configuration nearby satisfies the joints: the mechanism is "
+          "locked at a singular position (a link tangent to the guide it slides on, a toggle "
+          "with nothing to move), where holding it would take unbounded reactions; start it off "
+          "that position");
+    }
     if (driver_dropped && !driver_kept_nearby) {
       // A driver redundant nearby as well: its motion is fixed by the joints (build_solver
       // refuses it). Redundant only at assembly, it is a singular position (a state continued
