@@ -522,6 +522,12 @@ TEST(FlexibleLink, TheModelFileNamesWhatAFlexibleLinkCannotTake) {
   // Mass and density that disagree.
   EXPECT_NE(problems(head + "    mass: 1.0\n" + bar(1e9, 2)).find("differs from density"),
             std::string::npos);
+  // A marker off a 1 nm link's axis: the limit in significant digits (it read 0.000000 m).
+  const std::string tiny =
+      problems(head + "    markers: {P: [0.5, 0]}\n    flexible: {length: 1.0e-9, section: "
+                      "{circle: 0.01}, youngs_modulus: 1e9, density: 1000}\n");
+  EXPECT_NE(tiny.find("marker 'P' at [0.5, 0] is off the link's axis"), std::string::npos) << tiny;
+  EXPECT_NE(tiny.find("|x| <= length/2 = 5e-10 m"), std::string::npos) << tiny;
   // No section.
   EXPECT_NE(problems(head + "    flexible: {length: 1, youngs_modulus: 1e9, density: 1000}\n")
                 .find("missing required key 'section'"),

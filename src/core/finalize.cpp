@@ -12,6 +12,13 @@ namespace lash {
 
 namespace {
 
+/// A value for a message: %g (std::to_string's fixed six decimals read 5e-10 m as 0.000000).
+std::string num(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
 std::string join_problems(const std::vector<ModelProblem>& p) {
   std::string s;
   for (const auto& x : p) s += (s.empty() ? "" : "\n") + x.element + ": " + x.message;
@@ -121,16 +128,16 @@ class Checker {
     if (!positive(from_section)) return error(el, "give the density or the mass");
     if (b.mass == 0.0) b.mass = from_section;
     if (std::abs(b.mass - from_section) > 1e-6 * from_section)
-      error(el, "mass " + std::to_string(b.mass) + " kg differs from density × area × length = " +
-                    std::to_string(from_section) + " kg; give one of them");
+      error(el, "mass " + num(b.mass) + " kg differs from density × area × length = " +
+                    num(from_section) + " kg; give one of them");
     b.inertia = b.mass * m.length * m.length / 12.0;  // of the undeformed link, for reports
     for (const Marker& mk : b.markers)
       if (std::abs(mk.s_P_B.y()) > 1e-12 * m.length ||
           std::abs(mk.s_P_B.x()) > 0.5 * m.length * (1 + 1e-12))
-        error(el, "marker '" + mk.name + "' at [" + std::to_string(mk.s_P_B.x()) + ", " +
-                      std::to_string(mk.s_P_B.y()) +
+        error(el, "marker '" + mk.name + "' at [" + num(mk.s_P_B.x()) + ", " +
+                      num(mk.s_P_B.y()) +
                       "] is off the link's axis: markers of a flexible link lie at [x, 0] with "
-                      "|x| <= length/2 = " + std::to_string(0.5 * m.length) + " m");
+                      "|x| <= length/2 = " + num(0.5 * m.length) + " m");
   }
 
   void joint(Joint& j) {
